@@ -1,0 +1,53 @@
+# Enforces the direction of use between modules (DESIGN.md §1) on every source file under ROOT.
+# Usage: cmake -DROOT=<tree> -P check_layering.cmake   (fails with one line per violation)
+#
+# A project include is `#include "<module>/..."`. Each module may include only the modules listed
+# for it. libccd (<ccd/...>) may be included only from distance/crosscheck, tests and tools.
+cmake_minimum_required(VERSION 3.18)
+if(NOT ROOT)
+  message(FATAL_ERROR "check_layering: pass -DROOT=<source tree>")
+endif()
+get_filename_component(ROOT "${ROOT}" ABSOLUTE)
+
+set(allowed_core "core")
+set(allowed_distance "core;distance")
+set(allowed_impulse "core;impulse")
+set(allowed_scheduler "core;distance;impulse;scheduler")
+set(allowed_scenarios "core;distance;impulse;scheduler;scenarios")
+set(allowed_tools "core;distance;impulse;scheduler;scenarios;tools")
+set(allowed_tests "core;distance;impulse;scheduler;scenarios;tools;tests")
+set(modules core distance impulse scheduler scenarios tools tests)
+
+set(violations "")
+foreach(module IN LISTS modules)
+  file(GLOB_RECURSE files RELATIVE "${ROOT}" "${ROOT}/${module}/*.hpp" "${ROOT}/${module}/*.cpp")
+  foreach(rel IN LISTS files)
+    # The deliberately bad fixture tree is checked only when it is ROOT itself.
+    if(rel MATCHES "^tests/layering/")
+      continue()
+    endif()
+    # Read whole and split on newlines ourselves: file(STRINGS) would also split on ';'.
+    file(READ "${ROOT}/${rel}" content)
+    string(REPLACE ";" "," content "${content}")
+    string(REPLACE "\n" ";" lines "${content}")
+    set(lineno 0)
+    foreach(line IN LISTS lines)
+      math(EXPR lineno "${lineno} + 1")
+      if(line MATCHES "^[ \t]*#[ \t]*include[ \t]*\"([a-z_]+)/")
+        set(target "${CMAKE_MATCH_1}")
+        if(target IN_LIST modules AND NOT target IN_LIST allowed_${module})
+          string(APPEND violations "${rel}:${lineno}: ${module} may not include ${target}/ (DESIGN.md §1)\n")
+        endif()
+      elseif(line MATCHES "^[ \t]*#[ \t]*include[ \t]*<ccd/")
+        if(NOT (rel MATCHES "^distance/crosscheck/" OR module STREQUAL "tests" OR module STREQUAL "tools"))
+          string(APPEND violations "${rel}:${lineno}: libccd may be used only in distance/crosscheck, tests and tools\n")
+        endif()
+      endif()
+    endforeach()
+  endforeach()
+endforeach()
+
+if(violations)
+  message(FATAL_ERROR "layering violations:\n${violations}")
+endif()
+message(STATUS "layering: all includes follow DESIGN.md §1")

@@ -1,0 +1,15 @@
+# palpable_module(NAME DIR DEPS...): one static library per module from every .cpp in DIR
+# (non-recursive). Sources are globbed with CONFIGURE_DEPENDS so adding a file needs no edit here.
+function(palpable_module name dir)
+  file(GLOB _sources CONFIGURE_DEPENDS "${dir}/*.cpp")
+  file(GLOB _headers CONFIGURE_DEPENDS "${dir}/*.hpp")
+  if(_sources)
+    add_library(${name} STATIC ${_sources} ${_headers})
+    target_include_directories(${name} PUBLIC ${PROJECT_SOURCE_DIR})
+    target_link_libraries(${name} PUBLIC ${ARGN})
+  else()
+    add_library(${name} INTERFACE)
+    target_include_directories(${name} INTERFACE ${PROJECT_SOURCE_DIR})
+    target_link_libraries(${name} INTERFACE ${ARGN})
+  endif()
+endfunction()

@@ -1,0 +1,57 @@
+#pragma once
+// Every tolerance and knob of the simulator in one place (STYLE.md, after Jolt's PhysicsSettings):
+// unit, default and what changing it does. Scenes override these under "settings"; the command
+// line prints the values in effect. Derived tolerances are computed from these in one place
+// (derived_*) — no module keeps a private epsilon.
+#include <cmath>
+#include <string_view>
+
+namespace palpable {
+
+// How a collision's restitution phase ends (DESIGN.md §4).
+enum class RestitutionLaw {
+  kStronge,  // energetic: W_z(end) = (1 - e^2) W_z(max compression); never creates energy
+  kPoisson,  // kinetic: p_z(end) = (1 + e) p_z(max compression)
+  kNewton,   // kinematic: u_z' = -e u_z0; for comparison only, can create energy (Kane's paradox)
+};
+
+// What a microcollision aims at (DESIGN.md §4, "Continuous contact").
+enum class MicrocollisionRule {
+  kDriftFree,  // default: tangential target -a_t tau / 2, zero mean slip over the next flight
+  kReversal,   // Mirtich's rule: reverse the relative velocity (u' = -u0, with the rebound floor)
+};
+
+std::string_view to_string(RestitutionLaw law);
+std::string_view to_string(MicrocollisionRule rule);
+
+// Contact material of a pair of bodies.
+struct Material {
+  double friction = 0.5;     // Coulomb coefficient mu, >= 0
+  double restitution = 0.5;  // coefficient e in [0, 1] (meaning depends on RestitutionLaw)
+};
+
+struct Settings {
+  // Collision envelope epsilon [m]. A pair closer than this and approaching collides. The main
+  // accuracy knob of contact: resting/rolling error scales with it, event count with 1/sqrt(eps).
+  double envelope_m = 1e-4;
+
+  // Approach speed below which a collision is a microcollision [m/s]. Negative: derived per
+  // contact as sqrt(2 g_n envelope) (DESIGN.md §4).
+  double microcollision_speed_mps = -1.0;
+
+  // Relative tolerance of the adaptive Runge-Kutta integration of a collision over p_z [-].
+  // Smaller is more accurate and costs more integration steps.
+  double integration_tolerance = 1e-9;
+
+  RestitutionLaw restitution_law = RestitutionLaw::kStronge;
+  MicrocollisionRule microcollision_rule = MicrocollisionRule::kDriftFree;
+
+  // Relative tolerance of the numerical free-rigid-body rotation where no closed form is used [-].
+  double rotation_tolerance = 1e-13;
+
+  // Events processed at one instant for one pair before the scheduler reports a rounding loop
+  // and moves on (counted in the statistics, never silent).
+  int retry_limit = 100;
+};
+
+}  // namespace palpable

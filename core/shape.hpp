@@ -1,0 +1,107 @@
+#pragma once
+// Shapes in a body's modelling frame M (origin at the body's centre of mass; DESIGN.md §2).
+// Immutable after building; building validates its input and throws InputError naming what is
+// wrong. Convex polyhedra are half-edge meshes whose coplanar facets are merged into single convex
+// polygon faces (a box has 6 faces, 12 edges, 8 vertices — never triangulated).
+#include "core/types.hpp"
+
+#include <memory>
+#include <variant>
+#include <vector>
+
+namespace palpable {
+
+struct Sphere {
+  double radius = 0.0;  // [m] > 0
+};
+
+// The infinite solid { x : normal_M . x <= offset }. Only for fixed or kinematic bodies.
+struct Halfspace {
+  Vec3 normal_M = Vec3::UnitZ();  // unit outward normal
+  double offset = 0.0;            // [m]
+};
+
+// A half-edge of a convex polyhedron. Half-edge h runs from vertex `tail` to the tail of
+// `next`; `twin` runs the other way along the same edge; `face` is on h's left seen from outside
+// (faces' half-edges circulate counter-clockwise about the outward normal).
+struct HalfEdge {
+  int tail = -1;
+  int twin = -1;
+  int next = -1;
+  int prev = -1;
+  int face = -1;
+};
+
+struct PolyFace {
+  int half_edge = -1;         // any half-edge of the face
+  Vec3 normal_M = Vec3::Zero();  // unit outward normal
+  double offset = 0.0;        // plane: normal_M . x = offset
+};
+
+class ConvexPolyhedron {
+ public:
+  // The convex hull of `points` (at least 4 not coplanar), via Qhull, coplanar facets merged.
+  // `coplanar_tolerance` [m]: facets whose planes agree within it are merged into one face.
+  // The vertices are shifted so that the centre of mass of the solid (uniform density) is at the
+  // origin; `com_shift_M` reports the shift that was subtracted (points_given - shift = stored).
+  static ConvexPolyhedron from_points(const std::vector<Vec3>& points,
+                                      double coplanar_tolerance = -1.0 /* relative default */);
+  // Axis-aligned box centred at the origin.
+  static ConvexPolyhedron box(const Vec3& half_extents);
+  // Regular n-gonal prism, axis along z, centred at the origin; vertices on radius `radius`,
+  // the first at +x. A coin or cylinder as sides grow.
+  static ConvexPolyhedron prism(double radius, double half_height, int sides);
+
+  const std::vector<Vec3>& vertices() const { return vertices_; }
+  const std::vector<HalfEdge>& half_edges() const { return half_edges_; }
+  const std::vector<PolyFace>& faces() const { return faces_; }
+  // One half-edge leaving each vertex (its tail is the vertex).
+  const std::vector<int>& vertex_half_edge() const { return vertex_half_edge_; }
+  int num_edges() const { return static_cast<int>(half_edges_.size()) / 2; }
+  const Vec3& head(int half_edge) const { return vertices_[half_edges_[half_edges_[half_edge].twin].tail]; }
+  const Vec3& tail(int half_edge) const { return vertices_[half_edges_[half_edge].tail]; }
+
+  // The vertex maximising direction_M . v (a support point), in M.
+  Vec3 support(const Vec3& direction_M) const;
+  // Largest distance from the origin (the centre of mass) to any point of the shape [m].
+  double max_radius() const { return max_radius_; }
+  const Vec3& com_shift_M() const { return com_shift_M_; }
+
+ private:
+  friend class ConvexPolyhedronBuilder;
+  std::vector<Vec3> vertices_;
+  std::vector<HalfEdge> half_edges_;
+  std::vector<PolyFace> faces_;
+  std::vector<int> vertex_half_edge_;
+  double max_radius_ = 0.0;
+  Vec3 com_shift_M_ = Vec3::Zero();
+};
+
+struct CompoundPart;
+
+// A union of convex pieces, for fixed non-convex bodies (a dish, a table with cushions). Each
+// piece pairs separately in distance queries.
+struct Compound {
+  std::vector<CompoundPart> parts;
+};
+
+using Shape = std::variant<Sphere, ConvexPolyhedron, Halfspace, Compound>;
+
+// A convex piece of a compound, posed in the compound's modelling frame.
+struct CompoundPart {
+  std::shared_ptr<const Shape> shape;  // a Sphere or ConvexPolyhedron
+  Vec3 position_M = Vec3::Zero();
+  Quat orientation_M = Quat::Identity();
+};
+
+// True for shapes a dynamic body may have (finite volume).
+bool is_bounded(const Shape& shape);
+// Largest distance from the modelling-frame origin to any point of the shape; +inf for a halfspace.
+double max_radius(const Shape& shape);
+// Support point in world frame of a convex shape posed at (p_W, q_WM); throws for a halfspace or
+// compound.
+Vec3 support_W(const Shape& shape, const Vec3& p_W, const Quat& q_WM, const Vec3& direction_W);
+// World bounding box of the shape posed at (p_W, q_WM); infinite extents for a halfspace.
+Aabb bounding_box_W(const Shape& shape, const Vec3& p_W, const Quat& q_WM);
+
+}  // namespace palpable

@@ -1,0 +1,57 @@
+// palpable — the command line of the Palpable simulator. Subcommands register themselves
+// (tools/commands.hpp); this file only parses and dispatches.
+#include "core/check.hpp"
+#include "tools/commands.hpp"
+#include "tools/lib/exit_codes.hpp"
+
+#include <CLI/CLI.hpp>
+
+#include <iostream>
+
+namespace palpable::tools {
+std::vector<Command>& command_registry() {
+  static std::vector<Command> registry;
+  return registry;
+}
+}  // namespace palpable::tools
+
+int main(int argc, char** argv) {
+  using namespace palpable::tools;
+  CLI::App app{
+      "Palpable: impulse-based, event-driven rigid-body simulation with exact ballistic flight,\n"
+      "closest-feature collision detection and Coulomb friction integrated over the normal impulse\n"
+      "(after Mirtich & Canny, 1995).\n\n"
+      "Exit codes: 0 success; 1 the run failed; 2 bad input (command line, scene, spec), nothing\n"
+      "run; 3 the run finished but a requested check did not hold.\n",
+      "palpable"};
+  app.require_subcommand(1);
+  app.set_help_all_flag("--help-all", "Print help for every subcommand");
+
+  std::vector<std::pair<CLI::App*, std::function<int()>>> runners;
+  auto& registry = command_registry();
+  std::sort(registry.begin(), registry.end(),
+            [](const Command& a, const Command& b) { return a.name < b.name; });
+  for (const Command& command : registry) {
+    CLI::App* sub = app.add_subcommand(command.name);
+    runners.emplace_back(sub, command.build(*sub));
+  }
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    int code = app.exit(e);
+    return code == 0 ? kExitOk : kExitBadInput;
+  }
+  try {
+    for (auto& [sub, run] : runners) {
+      if (sub->parsed()) return run();
+    }
+  } catch (const palpable::InputError& e) {
+    std::cerr << "palpable: error: " << e.what() << "\n";
+    return kExitBadInput;
+  } catch (const std::exception& e) {
+    std::cerr << "palpable: failed: " << e.what() << "\n";
+    return kExitFailure;
+  }
+  return kExitFailure;
+}
