@@ -24,3 +24,14 @@ struct CommandRegistration {
 };
 
 }  // namespace palpable::tools
+
+// Example (tools/cmd_example.cpp):
+//   namespace {
+//   palpable::tools::CommandRegistration reg{"bench state", [](CLI::App& app) {
+//     app.description("...");
+//     auto repeats = std::make_shared<int>(5);
+//     app.add_option("--repeats", *repeats, "...");
+//     return std::function<int()>([repeats] { ...; return palpable::tools::kExitOk; });
+//   }};
+//   }
+// A name with a space registers under a group ("bench state" is `palpable bench state`).

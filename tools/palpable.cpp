@@ -6,7 +6,9 @@
 
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <iostream>
+#include <string>
 
 namespace palpable::tools {
 std::vector<Command>& command_registry() {
@@ -14,6 +16,15 @@ std::vector<Command>& command_registry() {
   return registry;
 }
 }  // namespace palpable::tools
+
+namespace {
+std::string group_description(const std::string& group) {
+  if (group == "bench") {
+    return "Benchmarks (not tests): each prints medians of repeated timings as JSON lines";
+  }
+  return group;
+}
+}  // namespace
 
 int main(int argc, char** argv) {
   using namespace palpable::tools;
@@ -31,8 +42,22 @@ int main(int argc, char** argv) {
   auto& registry = command_registry();
   std::sort(registry.begin(), registry.end(),
             [](const Command& a, const Command& b) { return a.name < b.name; });
+  // A name with a space ("bench distance") is a subcommand of a group ("bench"), created on
+  // first use; the group itself requires one of its subcommands.
   for (const Command& command : registry) {
-    CLI::App* sub = app.add_subcommand(command.name);
+    CLI::App* parent = &app;
+    std::string name = command.name;
+    if (auto space = name.find(' '); space != std::string::npos) {
+      std::string group = name.substr(0, space);
+      name = name.substr(space + 1);
+      try {
+        parent = app.get_subcommand(group);
+      } catch (const CLI::OptionNotFound&) {
+        parent = app.add_subcommand(group, group_description(group));
+        parent->require_subcommand(1);
+      }
+    }
+    CLI::App* sub = parent->add_subcommand(name);
     runners.emplace_back(sub, command.build(*sub));
   }
 
