@@ -1,0 +1,91 @@
+#pragma once
+// The event queue of the scheduler (DESIGN.md §5): a Boost.Heap 4-ary mutable heap ordered
+// strictly and deterministically by (time, kind, body ids, sequence number). Events are addressed
+// by a small integer id so that the owner of an event (a pair, a body's horizon) can reschedule
+// or erase it in O(log n). A slow, obviously correct reference implementation (a linear scan of a
+// vector) is selectable, so tests can check that both give the identical event sequence.
+#include "core/types.hpp"
+
+#include <boost/heap/d_ary_heap.hpp>
+
+#include <cstdint>
+#include <vector>
+
+namespace palpable {
+
+// Ordered: at equal times a kind listed earlier is processed first.
+enum class EventKind : std::uint8_t {
+  kPairCheck = 0,  // a pair's conservative bound (or exact time of impact) expires
+  kHorizon = 1,    // a body's broad-phase horizon expires: refresh its swept box and pairs
+  kSample = 2,     // write an output sample (extrapolated, commits nothing)
+  kEnd = 3,        // the end of the simulation
+};
+
+struct Event {
+  double t = 0.0;
+  EventKind kind = EventKind::kPairCheck;
+  BodyId a;  // for pair events a < b
+  BodyId b;  // invalid for single-body and global events
+  std::uint64_t sequence = 0;  // assigned by the queue on push/update
+};
+
+// Strict weak order: true when x must be processed before y.
+inline bool event_before(const Event& x, const Event& y) {
+  if (x.t != y.t) return x.t < y.t;
+  if (x.kind != y.kind) return x.kind < y.kind;
+  if (x.a.index != y.a.index) return x.a.index < y.a.index;
+  if (x.b.index != y.b.index) return x.b.index < y.b.index;
+  return x.sequence < y.sequence;
+}
+
+enum class QueueImpl { kHeap, kReference };
+
+class EventQueue {
+ public:
+  using EventId = std::uint32_t;
+  static constexpr EventId kNoEvent = 0xffffffffu;
+
+  explicit EventQueue(QueueImpl impl = QueueImpl::kHeap) : impl_(impl) {}
+
+  EventId push(Event event);
+  // Reschedules an event that is in the queue (its sequence number is renewed).
+  void update(EventId id, Event event);
+  void erase(EventId id);
+  bool contains(EventId id) const { return id < slots_.size() && slots_[id].live; }
+
+  bool empty() const { return size_ == 0; }
+  std::size_t size() const { return size_; }
+  const Event& top() const;
+  // Removes the earliest event and returns it together with its id (now free).
+  Event pop(EventId* id = nullptr);
+
+ private:
+  struct Entry {
+    Event event;
+    EventId id;
+  };
+  // Boost.Heap is a max-heap: the comparator answers "a pops after b".
+  struct PopsAfter {
+    bool operator()(const Entry& x, const Entry& y) const { return event_before(y.event, x.event); }
+  };
+  using Heap = boost::heap::d_ary_heap<Entry, boost::heap::arity<4>, boost::heap::mutable_<true>,
+                                       boost::heap::compare<PopsAfter>>;
+  struct Slot {
+    Heap::handle_type handle{};
+    std::size_t reference_index = 0;
+    bool live = false;
+  };
+
+  EventId allocate();
+  std::size_t reference_min() const;
+
+  QueueImpl impl_;
+  Heap heap_;
+  std::vector<Entry> reference_;  // unsorted; pop scans for the minimum
+  std::vector<Slot> slots_;
+  std::vector<EventId> free_ids_;
+  std::uint64_t next_sequence_ = 0;
+  std::size_t size_ = 0;
+};
+
+}  // namespace palpable
