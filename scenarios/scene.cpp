@@ -1,0 +1,491 @@
+#include "scenarios/scene.hpp"
+
+#include "core/check.hpp"
+#include "core/mass_properties.hpp"
+#include "core/shape.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <iostream>
+#include <set>
+#include <sstream>
+
+namespace palpable {
+namespace {
+
+using nlohmann::json;
+
+std::string describe(const json& value) {
+  std::string text = value.dump();
+  if (text.size() > 60) text = text.substr(0, 57) + "...";
+  return text;
+}
+
+// Walks a scene document keeping the JSON pointer of every value it reads, so that each error
+// names its path, the value found and what was expected.
+class Reader {
+ public:
+  explicit Reader(std::string source) : source_(std::move(source)) {}
+
+  // True for an error this reader raised (it already names the JSON path).
+  bool is_ours(const InputError& e) const { return e.where().rfind(source_ + ":", 0) == 0; }
+
+  [[noreturn]] void fail(const std::string& path, const std::string& message) const {
+    throw InputError(source_ + ":" + (path.empty() ? "/" : path), message);
+  }
+  [[noreturn]] void fail_value(const std::string& path, const json& value,
+                               const std::string& expected) const {
+    fail(path, "got " + describe(value) + ", expected " + expected);
+  }
+
+  const json& object(const json& value, const std::string& path) const {
+    if (!value.is_object()) fail_value(path, value, "an object");
+    return value;
+  }
+
+  // Rejects keys not in `allowed` (typos would otherwise be silently ignored).
+  void only_keys(const json& obj, const std::string& path, std::set<std::string> allowed) const {
+    for (auto it = obj.begin(); it != obj.end(); ++it) {
+      if (!allowed.count(it.key())) {
+        std::string list;
+        for (const auto& k : allowed) list += (list.empty() ? "" : ", ") + k;
+        fail(path + "/" + it.key(), "unknown key; expected one of: " + list);
+      }
+    }
+  }
+
+  const json& required(const json& obj, const std::string& path, const std::string& key) const {
+    auto it = obj.find(key);
+    if (it == obj.end()) fail(path + "/" + key, "missing required key");
+    return *it;
+  }
+
+  double number(const json& value, const std::string& path) const {
+    if (!value.is_number()) fail_value(path, value, "a number");
+    double x = value.get<double>();
+    if (!std::isfinite(x)) fail_value(path, value, "a finite number");
+    return x;
+  }
+  double positive(const json& value, const std::string& path) const {
+    double x = number(value, path);
+    if (!(x > 0.0)) fail_value(path, value, "a positive number");
+    return x;
+  }
+  double non_negative(const json& value, const std::string& path) const {
+    double x = number(value, path);
+    if (!(x >= 0.0)) fail_value(path, value, "a number >= 0");
+    return x;
+  }
+  std::string string(const json& value, const std::string& path) const {
+    if (!value.is_string()) fail_value(path, value, "a string");
+    return value.get<std::string>();
+  }
+  Vec3 vec3(const json& value, const std::string& path) const {
+    if (!value.is_array() || value.size() != 3) fail_value(path, value, "an array of 3 numbers");
+    return Vec3(number(value[0], path + "/0"), number(value[1], path + "/1"),
+                number(value[2], path + "/2"));
+  }
+  Quat quaternion(const json& value, const std::string& path) const {
+    if (!value.is_array() || value.size() != 4) {
+      fail_value(path, value, "a unit quaternion [w, x, y, z]");
+    }
+    Quat q(number(value[0], path + "/0"), number(value[1], path + "/1"),
+           number(value[2], path + "/2"), number(value[3], path + "/3"));
+    // Accept rounding in hand-written or generated files; reject anything that is not meant to
+    // be a unit quaternion.
+    if (std::abs(q.norm() - 1.0) > 1e-6) {
+      fail_value(path, value, "a unit quaternion [w, x, y, z] (norm within 1e-6 of 1; this has norm " +
+                                  std::to_string(q.norm()) + ")");
+    }
+    q.normalize();
+    return q;
+  }
+
+ private:
+  std::string source_;
+};
+
+std::shared_ptr<const Shape> parse_shape(const Reader& r, const json& value,
+                                         const std::string& path, bool allow_unbounded) {
+  r.object(value, path);
+  std::string type = r.string(r.required(value, path, "type"), path + "/type");
+  try {
+    if (type == "sphere") {
+      r.only_keys(value, path, {"type", "radius"});
+      double radius = r.positive(r.required(value, path, "radius"), path + "/radius");
+      return std::make_shared<const Shape>(Sphere{radius});
+    }
+    if (type == "box") {
+      r.only_keys(value, path, {"type", "half_extents"});
+      Vec3 h = r.vec3(r.required(value, path, "half_extents"), path + "/half_extents");
+      for (int i = 0; i < 3; ++i) {
+        if (!(h[i] > 0.0)) {
+          r.fail_value(path + "/half_extents/" + std::to_string(i), value["half_extents"][i],
+                       "a positive half extent");
+        }
+      }
+      return std::make_shared<const Shape>(ConvexPolyhedron::box(h));
+    }
+    if (type == "prism") {
+      r.only_keys(value, path, {"type", "radius", "half_height", "sides"});
+      double radius = r.positive(r.required(value, path, "radius"), path + "/radius");
+      double half_height =
+          r.positive(r.required(value, path, "half_height"), path + "/half_height");
+      const json& sides = r.required(value, path, "sides");
+      if (!sides.is_number_integer() || sides.get<long long>() < 3 ||
+          sides.get<long long>() > 100000) {
+        r.fail_value(path + "/sides", sides, "an integer number of sides from 3 to 100000");
+      }
+      return std::make_shared<const Shape>(
+          ConvexPolyhedron::prism(radius, half_height, sides.get<int>()));
+    }
+    if (type == "convex") {
+      r.only_keys(value, path, {"type", "vertices"});
+      const json& vertices = r.required(value, path, "vertices");
+      if (!vertices.is_array() || vertices.size() < 4) {
+        r.fail_value(path + "/vertices", vertices, "an array of at least 4 points [x, y, z]");
+      }
+      std::vector<Vec3> points;
+      for (std::size_t i = 0; i < vertices.size(); ++i) {
+        points.push_back(r.vec3(vertices[i], path + "/vertices/" + std::to_string(i)));
+      }
+      return std::make_shared<const Shape>(ConvexPolyhedron::from_points(points));
+    }
+    if (type == "halfspace") {
+      if (!allow_unbounded) {
+        r.fail(path + "/type", "a halfspace is unbounded: only a fixed or kinematic body may have one");
+      }
+      r.only_keys(value, path, {"type", "normal", "offset"});
+      Vec3 n = r.vec3(r.required(value, path, "normal"), path + "/normal");
+      if (!(n.norm() > 0.0)) r.fail_value(path + "/normal", value["normal"], "a non-zero vector");
+      double offset = value.contains("offset") ? r.number(value["offset"], path + "/offset") : 0.0;
+      // n . x <= offset with |n| != 1 is the same solid as n/|n| . x <= offset/|n|.
+      return std::make_shared<const Shape>(Halfspace{n.normalized(), offset / n.norm()});
+    }
+    if (type == "compound") {
+      if (!allow_unbounded) {
+        r.fail(path + "/type", "a compound is for fixed or kinematic bodies only");
+      }
+      r.only_keys(value, path, {"type", "parts"});
+      const json& parts = r.required(value, path, "parts");
+      if (!parts.is_array() || parts.empty()) {
+        r.fail_value(path + "/parts", parts, "a non-empty array of parts");
+      }
+      Compound compound;
+      for (std::size_t i = 0; i < parts.size(); ++i) {
+        std::string part_path = path + "/parts/" + std::to_string(i);
+        r.object(parts[i], part_path);
+        r.only_keys(parts[i], part_path, {"shape", "position", "orientation"});
+        CompoundPart part;
+        part.shape = parse_shape(r, r.required(parts[i], part_path, "shape"), part_path + "/shape",
+                                 /*allow_unbounded=*/false);
+        if (!std::holds_alternative<Sphere>(*part.shape) &&
+            !std::holds_alternative<ConvexPolyhedron>(*part.shape)) {
+          r.fail(part_path + "/shape", "a compound part must be a sphere, box, prism or convex");
+        }
+        if (parts[i].contains("position")) {
+          part.position_M = r.vec3(parts[i]["position"], part_path + "/position");
+        }
+        if (parts[i].contains("orientation")) {
+          part.orientation_M = r.quaternion(parts[i]["orientation"], part_path + "/orientation");
+        }
+        compound.parts.push_back(std::move(part));
+      }
+      return std::make_shared<const Shape>(std::move(compound));
+    }
+  } catch (const InputError& e) {
+    // Errors from the shape builders (degenerate hull, ...) do not know the JSON path.
+    if (r.is_ours(e)) throw;
+    r.fail(path, e.what());
+  }
+  r.fail_value(path + "/type", value["type"],
+               "one of \"sphere\", \"box\", \"prism\", \"convex\", \"halfspace\", \"compound\"");
+}
+
+Material parse_material(const Reader& r, const json& value, const std::string& path,
+                        const Material& defaults, bool pair) {
+  r.object(value, path);
+  if (pair) {
+    r.only_keys(value, path, {"bodies", "friction", "restitution"});
+  } else {
+    r.only_keys(value, path, {"friction", "restitution"});
+  }
+  Material m = defaults;
+  if (value.contains("friction")) m.friction = r.non_negative(value["friction"], path + "/friction");
+  if (value.contains("restitution")) {
+    m.restitution = r.non_negative(value["restitution"], path + "/restitution");
+    if (m.restitution > 1.0) {
+      r.fail_value(path + "/restitution", value["restitution"], "a coefficient in [0, 1]");
+    }
+  }
+  return m;
+}
+
+void parse_settings(const Reader& r, const json& value, const std::string& path, Settings& s) {
+  r.object(value, path);
+  r.only_keys(value, path,
+              {"envelope", "microcollision_speed", "integration_tolerance", "restitution_law",
+               "microcollision_rule", "rotation_tolerance", "retry_limit"});
+  if (value.contains("envelope")) s.envelope_m = r.positive(value["envelope"], path + "/envelope");
+  if (value.contains("microcollision_speed")) {
+    s.microcollision_speed_mps =
+        r.positive(value["microcollision_speed"], path + "/microcollision_speed");
+  }
+  if (value.contains("integration_tolerance")) {
+    s.integration_tolerance =
+        r.positive(value["integration_tolerance"], path + "/integration_tolerance");
+    if (s.integration_tolerance >= 1.0 || s.integration_tolerance < 1e-15) {
+      r.fail_value(path + "/integration_tolerance", value["integration_tolerance"],
+                   "a relative tolerance in [1e-15, 1)");
+    }
+  }
+  if (value.contains("rotation_tolerance")) {
+    s.rotation_tolerance = r.positive(value["rotation_tolerance"], path + "/rotation_tolerance");
+  }
+  if (value.contains("restitution_law")) {
+    std::string law = r.string(value["restitution_law"], path + "/restitution_law");
+    if (law == "stronge") {
+      s.restitution_law = RestitutionLaw::kStronge;
+    } else if (law == "poisson") {
+      s.restitution_law = RestitutionLaw::kPoisson;
+    } else if (law == "newton") {
+      s.restitution_law = RestitutionLaw::kNewton;
+    } else {
+      r.fail_value(path + "/restitution_law", value["restitution_law"],
+                   "\"stronge\", \"poisson\" or \"newton\"");
+    }
+  }
+  if (value.contains("microcollision_rule")) {
+    std::string rule = r.string(value["microcollision_rule"], path + "/microcollision_rule");
+    if (rule == "drift_free") {
+      s.microcollision_rule = MicrocollisionRule::kDriftFree;
+    } else if (rule == "reversal") {
+      s.microcollision_rule = MicrocollisionRule::kReversal;
+    } else {
+      r.fail_value(path + "/microcollision_rule", value["microcollision_rule"],
+                   "\"drift_free\" or \"reversal\"");
+    }
+  }
+  if (value.contains("retry_limit")) {
+    const json& v = value["retry_limit"];
+    if (!v.is_number_integer() || v.get<long long>() < 1 || v.get<long long>() > 1000000) {
+      r.fail_value(path + "/retry_limit", v, "an integer from 1 to 1000000");
+    }
+    s.retry_limit = v.get<int>();
+  }
+}
+
+Body parse_body(const Reader& r, const json& value, const std::string& path) {
+  r.object(value, path);
+  r.only_keys(value, path,
+              {"name", "motion", "mass", "density", "shape", "position", "orientation", "velocity",
+               "angular_velocity"});
+  Body body;
+  body.name = r.string(r.required(value, path, "name"), path + "/name");
+  if (body.name.empty()) r.fail_value(path + "/name", value["name"], "a non-empty name");
+
+  const json& motion = value.contains("motion") ? value["motion"] : json("dynamic");
+  if (motion == "dynamic") {
+    body.motion = MotionKind::kDynamic;
+  } else if (motion == "fixed") {
+    body.motion = MotionKind::kFixed;
+  } else if (motion.is_object() && motion.size() == 1 && motion.contains("kinematic")) {
+    body.motion = MotionKind::kKinematic;
+    std::string kpath = path + "/motion/kinematic";
+    const json& k = r.object(motion["kinematic"], kpath);
+    r.only_keys(k, kpath, {"angular_velocity", "point", "velocity"});
+    if (k.contains("angular_velocity")) {
+      body.kinematic.angular_velocity_W = r.vec3(k["angular_velocity"], kpath + "/angular_velocity");
+    }
+    if (k.contains("point")) body.kinematic.point_W = r.vec3(k["point"], kpath + "/point");
+    if (k.contains("velocity")) body.kinematic.velocity_W = r.vec3(k["velocity"], kpath + "/velocity");
+  } else {
+    r.fail_value(path + "/motion", motion,
+                 "\"dynamic\", \"fixed\" or {\"kinematic\": {\"angular_velocity\": [..], "
+                 "\"point\": [..], \"velocity\": [..]}}");
+  }
+
+  body.shape = parse_shape(r, r.required(value, path, "shape"), path + "/shape",
+                           /*allow_unbounded=*/!body.is_dynamic());
+
+  if (body.is_dynamic()) {
+    bool has_mass = value.contains("mass");
+    bool has_density = value.contains("density");
+    if (has_mass == has_density) {
+      r.fail(path, has_mass ? "give either \"mass\" or \"density\", not both"
+                            : "missing \"mass\" (kg) or \"density\" (kg/m^3) of a dynamic body");
+    }
+    if (has_mass) {
+      body.mass = mass_properties_from_mass(*body.shape, r.positive(value["mass"], path + "/mass"));
+    } else {
+      body.mass = mass_properties_from_density(*body.shape,
+                                               r.positive(value["density"], path + "/density"));
+    }
+  } else {
+    body.mass = infinite_mass_properties();
+  }
+
+  if (value.contains("position")) body.state.x_W = r.vec3(value["position"], path + "/position");
+  if (value.contains("orientation")) {
+    body.state.q_WM = r.quaternion(value["orientation"], path + "/orientation");
+  }
+  if (value.contains("velocity")) body.state.v_W = r.vec3(value["velocity"], path + "/velocity");
+  if (value.contains("angular_velocity")) {
+    body.state.w_W = r.vec3(value["angular_velocity"], path + "/angular_velocity");
+  }
+  if (body.motion == MotionKind::kFixed &&
+      (body.state.v_W.norm() != 0.0 || body.state.w_W.norm() != 0.0)) {
+    r.fail(path, "a fixed body cannot have a velocity; use a kinematic motion");
+  }
+  if (body.motion == MotionKind::kKinematic &&
+      (value.contains("velocity") || value.contains("angular_velocity"))) {
+    r.fail(path, "a kinematic body's velocities come from its \"motion\"; remove \"velocity\" / "
+                 "\"angular_velocity\"");
+  }
+  return body;
+}
+
+}  // namespace
+
+const Material& Scene::material(BodyId a, BodyId b) const {
+  for (const PairMaterial& p : pair_materials) {
+    if ((p.a == a && p.b == b) || (p.a == b && p.b == a)) return p.material;
+  }
+  return default_material;
+}
+
+BodyId Scene::find_body(const std::string& body_name) const {
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    if (bodies[i].name == body_name) return BodyId{static_cast<std::uint32_t>(i)};
+  }
+  return BodyId{};
+}
+
+Scene scene_from_json(const json& doc, const std::string& source) {
+  Reader r(source);
+  r.object(doc, "");
+  r.only_keys(doc, "",
+              {"format", "name", "description", "gravity", "end_time", "output", "settings",
+               "materials", "bodies", "reference"});
+  std::string format = r.string(r.required(doc, "", "format"), "/format");
+  if (format != "palpable-scene/1") r.fail_value("/format", doc["format"], "\"palpable-scene/1\"");
+
+  Scene scene;
+  scene.source = source;
+  scene.name = doc.contains("name") ? r.string(doc["name"], "/name") : source;
+  if (doc.contains("description")) r.string(doc["description"], "/description");
+  if (doc.contains("gravity")) scene.gravity_W = r.vec3(doc["gravity"], "/gravity");
+  scene.end_time = r.positive(r.required(doc, "", "end_time"), "/end_time");
+
+  if (doc.contains("output")) {
+    const json& out = r.object(doc["output"], "/output");
+    r.only_keys(out, "/output", {"interval"});
+    if (out.contains("interval")) scene.output_interval = r.positive(out["interval"], "/output/interval");
+  }
+  if (doc.contains("settings")) parse_settings(r, doc["settings"], "/settings", scene.settings);
+
+  const json& bodies = r.required(doc, "", "bodies");
+  if (!bodies.is_array() || bodies.empty()) r.fail_value("/bodies", bodies, "a non-empty array of bodies");
+  std::set<std::string> names;
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    std::string path = "/bodies/" + std::to_string(i);
+    Body body = parse_body(r, bodies[i], path);
+    if (!names.insert(body.name).second) {
+      r.fail_value(path + "/name", bodies[i]["name"], "a name no other body has");
+    }
+    scene.bodies.push_back(std::move(body));
+  }
+
+  if (doc.contains("materials")) {
+    const json& materials = r.object(doc["materials"], "/materials");
+    r.only_keys(materials, "/materials", {"default", "pairs"});
+    if (materials.contains("default")) {
+      scene.default_material = parse_material(r, materials["default"], "/materials/default",
+                                              scene.default_material, false);
+    }
+    if (materials.contains("pairs")) {
+      const json& pairs = materials["pairs"];
+      if (!pairs.is_array()) r.fail_value("/materials/pairs", pairs, "an array");
+      for (std::size_t i = 0; i < pairs.size(); ++i) {
+        std::string path = "/materials/pairs/" + std::to_string(i);
+        PairMaterial pm;
+        pm.material = parse_material(r, pairs[i], path, scene.default_material, true);
+        const json& names_json = r.required(pairs[i], path, "bodies");
+        if (!names_json.is_array() || names_json.size() != 2) {
+          r.fail_value(path + "/bodies", names_json, "an array of two body names");
+        }
+        BodyId ids[2];
+        for (int k = 0; k < 2; ++k) {
+          std::string name = r.string(names_json[k], path + "/bodies/" + std::to_string(k));
+          ids[k] = scene.find_body(name);
+          if (!ids[k].valid()) {
+            r.fail_value(path + "/bodies/" + std::to_string(k), names_json[k],
+                         "the name of a body in /bodies");
+          }
+        }
+        if (ids[0] == ids[1]) r.fail_value(path + "/bodies", names_json, "two different bodies");
+        pm.a = ids[0];
+        pm.b = ids[1];
+        scene.pair_materials.push_back(pm);
+      }
+    }
+  }
+  if (doc.contains("reference")) scene.reference = r.object(doc["reference"], "/reference");
+  return scene;
+}
+
+json read_json_file(const std::string& path) {
+  std::ostringstream text;
+  if (path == "-") {
+    text << std::cin.rdbuf();
+  } else {
+    std::ifstream in(path);
+    if (!in) throw InputError(path, "cannot open file");
+    text << in.rdbuf();
+  }
+  try {
+    return json::parse(text.str());
+  } catch (const json::parse_error& e) {
+    throw InputError(path, std::string("not valid JSON: ") + e.what());
+  }
+}
+
+void apply_override(json& doc, const std::string& assignment) {
+  auto eq = assignment.find('=');
+  if (eq == std::string::npos || assignment.empty() || assignment[0] != '/') {
+    throw InputError("--set " + assignment, "expected /json/pointer=value (RFC 6901 pointer)");
+  }
+  std::string pointer_text = assignment.substr(0, eq);
+  std::string value_text = assignment.substr(eq + 1);
+  json value;
+  try {
+    value = json::parse(value_text);
+  } catch (const json::parse_error&) {
+    value = value_text;  // a bare word: a string
+  }
+  try {
+    json::json_pointer pointer(pointer_text);
+    json& parent = doc.at(pointer.parent_pointer());
+    if (parent.is_array()) {
+      const std::string& last = pointer.back();
+      if (last != "-") {
+        std::size_t index = std::stoul(last);
+        if (index >= parent.size()) {
+          throw InputError("--set " + assignment,
+                           "index " + last + " is past the end of the array at " +
+                               pointer.parent_pointer().to_string());
+        }
+      }
+    } else if (!parent.is_object()) {
+      throw InputError("--set " + assignment,
+                       pointer.parent_pointer().to_string() + " is not an object or array");
+    }
+    doc[pointer] = value;
+  } catch (const json::exception& e) {
+    throw InputError("--set " + assignment, std::string("no such place in the scene: ") + e.what());
+  } catch (const std::invalid_argument&) {
+    throw InputError("--set " + assignment, "array index is not a number");
+  }
+}
+
+}  // namespace palpable
