@@ -1,0 +1,30 @@
+#pragma once
+// Closed-form references a trace is compared with (DESIGN.md §6). Each takes a JSON spec of its
+// parameters (from a scene's "reference" object, or the command line of `palpable compare`) and
+// a sampled trace, and returns named error figures as JSON.
+//
+//   incline:   {"type": "incline", "body": "block", "angle_deg": 30, "friction": 0.7,
+//               "gravity": 9.81, "initial_speed": 2.0, "down_slope": [x, y, z], "normal": [x, y, z]}
+//   turntable: {"type": "turntable", "body": "ball", "omega": 6.283185307179586,
+//               "axis": [0, 0, 1], "k": 0.4}      (k: I = k m r^2; 2/5 for a solid ball)
+//
+// Stop times are measured by a least-squares fit of the position (never from a sampled
+// velocity, which jitters by about a_t tau / 2 during microcollision contact; DESIGN.md §4).
+#include "scenarios/trace.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <string>
+
+namespace palpable {
+
+// Throws InputError naming `where` + the spec key for a bad spec.
+nlohmann::json compare_with_reference(const nlohmann::json& spec, const Trace& trace,
+                                      const std::string& where);
+
+// Least-squares polynomial fit y ~ sum_k c_k t^k (k = 0..degree), conditioned by centring and
+// scaling t. Returns the coefficients in the unscaled variable t.
+std::vector<double> polynomial_fit(const std::vector<double>& t, const std::vector<double>& y,
+                                   int degree);
+
+}  // namespace palpable

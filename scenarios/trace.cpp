@@ -1,0 +1,115 @@
+#include "scenarios/trace.hpp"
+
+#include "core/check.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <ostream>
+#include <sstream>
+
+namespace palpable {
+
+std::size_t Trace::body_index(const std::string& name, const std::string& where) const {
+  for (std::size_t i = 0; i < body_names.size(); ++i) {
+    if (body_names[i] == name) return i;
+  }
+  std::string known;
+  for (const auto& n : body_names) known += (known.empty() ? "" : ", ") + n;
+  throw InputError(where, "no body \"" + name + "\" in the trace (bodies: " + known + ")");
+}
+
+std::vector<BodyState> Trace::series(std::size_t body) const {
+  std::vector<BodyState> out;
+  out.reserve(samples.size());
+  for (const auto& s : samples) out.push_back(s[body]);
+  return out;
+}
+
+namespace {
+void put(std::ostream& out, double x) {
+  char buffer[32];
+  auto result = std::to_chars(buffer, buffer + sizeof buffer, x, std::chars_format::general, 17);
+  out.write(buffer, result.ptr - buffer);
+}
+}  // namespace
+
+void write_trace_rows(std::ostream& out, double t, const std::vector<std::string>& names,
+                      const std::vector<BodyState>& states) {
+  for (std::size_t i = 0; i < states.size(); ++i) {
+    const BodyState& s = states[i];
+    put(out, t);
+    out << ',' << names[i];
+    const double values[] = {s.x_W.x(),   s.x_W.y(),   s.x_W.z(),   s.q_WM.w(), s.q_WM.x(),
+                             s.q_WM.y(),  s.q_WM.z(),  s.v_W.x(),   s.v_W.y(),  s.v_W.z(),
+                             s.w_W.x(),   s.w_W.y(),   s.w_W.z()};
+    for (double v : values) {
+      out << ',';
+      put(out, v);
+    }
+    out << '\n';
+  }
+}
+
+Trace read_trace_csv(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path, "cannot open trace file");
+  std::string line;
+  if (!std::getline(in, line) || line.rfind(kTraceHeader, 0) != 0) {
+    throw InputError(path + ":1", std::string("expected the trace header \"") + kTraceHeader + "\"");
+  }
+  Trace trace;
+  std::map<std::string, std::size_t> index;
+  std::size_t line_number = 1;
+  double current_t = std::nan("");
+  while (std::getline(in, line)) {
+    ++line_number;
+    if (line.empty()) continue;
+    std::vector<std::string> fields;
+    std::stringstream ss(line);
+    std::string field;
+    while (std::getline(ss, field, ',')) fields.push_back(field);
+    if (fields.size() < 15) {
+      throw InputError(path + ":" + std::to_string(line_number), "expected at least 15 columns");
+    }
+    double v[14];
+    for (int k = 0; k < 14; ++k) {
+      const std::string& f = fields[k == 0 ? 0 : k + 1];
+      auto result = std::from_chars(f.data(), f.data() + f.size(), v[k]);
+      if (result.ec != std::errc() || result.ptr != f.data() + f.size()) {
+        throw InputError(path + ":" + std::to_string(line_number),
+                         "not a number: \"" + f + "\"");
+      }
+    }
+    const std::string& name = fields[1];
+    if (trace.times.empty() || v[0] != current_t) {
+      if (!trace.times.empty() && !(v[0] > current_t)) {
+        throw InputError(path + ":" + std::to_string(line_number), "time runs backwards");
+      }
+      current_t = v[0];
+      trace.times.push_back(current_t);
+      trace.samples.emplace_back(trace.body_names.size());
+    }
+    auto it = index.find(name);
+    if (it == index.end()) {
+      if (trace.times.size() > 1) {
+        throw InputError(path + ":" + std::to_string(line_number),
+                         "body \"" + name + "\" first appears after the first sample");
+      }
+      it = index.emplace(name, trace.body_names.size()).first;
+      trace.body_names.push_back(name);
+      trace.samples.back().emplace_back();
+    }
+    BodyState& s = trace.samples.back()[it->second];
+    s.t = v[0];
+    s.x_W = Vec3(v[1], v[2], v[3]);
+    s.q_WM = Quat(v[4], v[5], v[6], v[7]);
+    s.v_W = Vec3(v[8], v[9], v[10]);
+    s.w_W = Vec3(v[11], v[12], v[13]);
+  }
+  if (trace.times.empty()) throw InputError(path, "the trace has no samples");
+  return trace;
+}
+
+}  // namespace palpable
