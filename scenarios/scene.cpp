@@ -347,20 +347,6 @@ Body parse_body(const Reader& r, const json& value, const std::string& path) {
 
 }  // namespace
 
-const Material& Scene::material(BodyId a, BodyId b) const {
-  for (const PairMaterial& p : pair_materials) {
-    if ((p.a == a && p.b == b) || (p.a == b && p.b == a)) return p.material;
-  }
-  return default_material;
-}
-
-BodyId Scene::find_body(const std::string& body_name) const {
-  for (std::size_t i = 0; i < bodies.size(); ++i) {
-    if (bodies[i].name == body_name) return BodyId{static_cast<std::uint32_t>(i)};
-  }
-  return BodyId{};
-}
-
 Scene scene_from_json(const json& doc, const std::string& source) {
   Reader r(source);
   r.object(doc, "");
@@ -374,7 +360,7 @@ Scene scene_from_json(const json& doc, const std::string& source) {
   scene.source = source;
   scene.name = doc.contains("name") ? r.string(doc["name"], "/name") : source;
   if (doc.contains("description")) r.string(doc["description"], "/description");
-  if (doc.contains("gravity")) scene.gravity_W = r.vec3(doc["gravity"], "/gravity");
+  if (doc.contains("gravity")) scene.world.gravity_W = r.vec3(doc["gravity"], "/gravity");
   scene.end_time = r.positive(r.required(doc, "", "end_time"), "/end_time");
 
   if (doc.contains("output")) {
@@ -382,7 +368,7 @@ Scene scene_from_json(const json& doc, const std::string& source) {
     r.only_keys(out, "/output", {"interval"});
     if (out.contains("interval")) scene.output_interval = r.positive(out["interval"], "/output/interval");
   }
-  if (doc.contains("settings")) parse_settings(r, doc["settings"], "/settings", scene.settings);
+  if (doc.contains("settings")) parse_settings(r, doc["settings"], "/settings", scene.world.settings);
 
   const json& bodies = r.required(doc, "", "bodies");
   if (!bodies.is_array() || bodies.empty()) r.fail_value("/bodies", bodies, "a non-empty array of bodies");
@@ -393,15 +379,15 @@ Scene scene_from_json(const json& doc, const std::string& source) {
     if (!names.insert(body.name).second) {
       r.fail_value(path + "/name", bodies[i]["name"], "a name no other body has");
     }
-    scene.bodies.push_back(std::move(body));
+    scene.world.bodies.push_back(std::move(body));
   }
 
   if (doc.contains("materials")) {
     const json& materials = r.object(doc["materials"], "/materials");
     r.only_keys(materials, "/materials", {"default", "pairs"});
     if (materials.contains("default")) {
-      scene.default_material = parse_material(r, materials["default"], "/materials/default",
-                                              scene.default_material, false);
+      scene.world.default_material = parse_material(r, materials["default"], "/materials/default",
+                                              scene.world.default_material, false);
     }
     if (materials.contains("pairs")) {
       const json& pairs = materials["pairs"];
@@ -409,7 +395,7 @@ Scene scene_from_json(const json& doc, const std::string& source) {
       for (std::size_t i = 0; i < pairs.size(); ++i) {
         std::string path = "/materials/pairs/" + std::to_string(i);
         PairMaterial pm;
-        pm.material = parse_material(r, pairs[i], path, scene.default_material, true);
+        pm.material = parse_material(r, pairs[i], path, scene.world.default_material, true);
         const json& names_json = r.required(pairs[i], path, "bodies");
         if (!names_json.is_array() || names_json.size() != 2) {
           r.fail_value(path + "/bodies", names_json, "an array of two body names");
@@ -417,7 +403,7 @@ Scene scene_from_json(const json& doc, const std::string& source) {
         BodyId ids[2];
         for (int k = 0; k < 2; ++k) {
           std::string name = r.string(names_json[k], path + "/bodies/" + std::to_string(k));
-          ids[k] = scene.find_body(name);
+          ids[k] = scene.world.find_body(name);
           if (!ids[k].valid()) {
             r.fail_value(path + "/bodies/" + std::to_string(k), names_json[k],
                          "the name of a body in /bodies");
@@ -426,7 +412,7 @@ Scene scene_from_json(const json& doc, const std::string& source) {
         if (ids[0] == ids[1]) r.fail_value(path + "/bodies", names_json, "two different bodies");
         pm.a = ids[0];
         pm.b = ids[1];
-        scene.pair_materials.push_back(pm);
+        scene.world.pair_materials.push_back(pm);
       }
     }
   }

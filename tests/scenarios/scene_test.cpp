@@ -21,16 +21,16 @@ json load_corpus() {
 TEST_CASE("the base scene of the corpus parses", "[scenarios][scene]") {
   json corpus = load_corpus();
   palpable::Scene scene = palpable::scene_from_json(corpus["base"], "base.json");
-  REQUIRE(scene.bodies.size() == 3);
-  CHECK(scene.bodies[0].motion == palpable::MotionKind::kFixed);
-  CHECK(scene.bodies[0].mass.inv_mass == 0.0);
-  CHECK(scene.bodies[1].mass.mass == Approx(1.0));
+  REQUIRE(scene.world.bodies.size() == 3);
+  CHECK(scene.world.bodies[0].motion == palpable::MotionKind::kFixed);
+  CHECK(scene.world.bodies[0].mass.inv_mass == 0.0);
+  CHECK(scene.world.bodies[1].mass.mass == Approx(1.0));
   // 0.2 m cube at 1000 kg/m^3 weighs 8 kg.
-  CHECK(scene.bodies[2].mass.mass == Approx(8.0).epsilon(1e-12));
-  CHECK(scene.material(palpable::BodyId{1}, palpable::BodyId{0}).friction == 0.7);
-  CHECK(scene.material(palpable::BodyId{0}, palpable::BodyId{1}).restitution == 0.0);
-  CHECK(scene.material(palpable::BodyId{2}, palpable::BodyId{0}).friction == 0.5);
-  CHECK(scene.settings.envelope_m == 1e-4);
+  CHECK(scene.world.bodies[2].mass.mass == Approx(8.0).epsilon(1e-12));
+  CHECK(scene.world.material(palpable::BodyId{1}, palpable::BodyId{0}).friction == 0.7);
+  CHECK(scene.world.material(palpable::BodyId{0}, palpable::BodyId{1}).restitution == 0.0);
+  CHECK(scene.world.material(palpable::BodyId{2}, palpable::BodyId{0}).friction == 0.5);
+  CHECK(scene.world.settings.envelope_m == 1e-4);
 }
 
 TEST_CASE("every bad scene is rejected naming its JSON path", "[scenarios][scene]") {
@@ -66,10 +66,10 @@ TEST_CASE("overrides address the scene by JSON pointer", "[scenarios][scene]") {
   palpable::apply_override(doc, "/settings/restitution_law=poisson");  // bare word: a string
   palpable::apply_override(doc, "/bodies/1/position=[0, 0, 2]");
   palpable::Scene scene = palpable::scene_from_json(doc, "base.json");
-  CHECK(scene.pair_materials[0].material.friction == 0.6);
-  CHECK(scene.settings.envelope_m == 1e-5);
-  CHECK(scene.settings.restitution_law == palpable::RestitutionLaw::kPoisson);
-  CHECK(scene.bodies[1].state.x_W.z() == 2.0);
+  CHECK(scene.world.pair_materials[0].material.friction == 0.6);
+  CHECK(scene.world.settings.envelope_m == 1e-5);
+  CHECK(scene.world.settings.restitution_law == palpable::RestitutionLaw::kPoisson);
+  CHECK(scene.world.bodies[1].state.x_W.z() == 2.0);
 
   CHECK_THROWS_WITH(palpable::apply_override(doc, "settings/envelope=1"),
                     Catch::Contains("/json/pointer=value"));
