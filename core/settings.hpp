@@ -49,6 +49,12 @@ struct Settings {
   // Relative tolerance of the numerical free-rigid-body rotation where no closed form is used [-].
   double rotation_tolerance = 1e-13;
 
+  // Relative difference of principal moments below which they count as equal [-] (ballistic
+  // motion, core/ballistic.hpp): equal moments select the closed-form spherical or axisymmetric
+  // rotation. A body whose moments differ by delta (relative) below this moves as if symmetric,
+  // with an orientation error ~ delta * |omega| * t; larger is never needed for accuracy.
+  double inertia_symmetry_tolerance = 1e-12;
+
   // Events processed at one instant for one pair before the scheduler reports a rounding loop
   // and moves on (counted in the statistics, never silent).
   int retry_limit = 100;
