@@ -47,7 +47,8 @@ json compare_incline(const json& spec, const Trace& trace, const std::string& wh
   const double theta = spec_number(spec, where, "angle_deg") * kPi / 180.0;
   const double mu = spec_number(spec, where, "friction");
   const double g = spec_number(spec, where, "gravity");
-  const double v0 = spec.contains("initial_speed") ? spec_number(spec, where, "initial_speed") : 0.0;
+  const double v0 =
+      spec.contains("initial_speed") ? spec_number(spec, where, "initial_speed") : 0.0;
   const Vec3 down = spec_vec3(spec, where, "down_slope");
   const Vec3 normal = spec_vec3(spec, where, "normal");
   const Vec3 across = normal.cross(down).normalized();
@@ -227,7 +228,8 @@ json compare_with_reference(const json& spec, const Trace& trace, const std::str
   } else if (type == "turntable") {
     figures = compare_turntable(spec, trace, where);
   } else {
-    throw InputError(where + "/type", "got \"" + type + "\", expected \"incline\" or \"turntable\"");
+    throw InputError(where + "/type",
+                     "got \"" + type + "\", expected \"incline\" or \"turntable\"");
   }
   figures["reference"] = type;
   return figures;

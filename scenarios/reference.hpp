@@ -4,7 +4,8 @@
 // a sampled trace, and returns named error figures as JSON.
 //
 //   incline:   {"type": "incline", "body": "block", "angle_deg": 30, "friction": 0.7,
-//               "gravity": 9.81, "initial_speed": 2.0, "down_slope": [x, y, z], "normal": [x, y, z]}
+//               "gravity": 9.81, "initial_speed": 2.0, "down_slope": [x, y, z], "normal": [x, y,
+//               z]}
 //   turntable: {"type": "turntable", "body": "ball", "omega": 6.283185307179586,
 //               "axis": [0, 0, 1], "k": 0.4}      (k: I = k m r^2; 2/5 for a solid ball)
 //

@@ -94,8 +94,9 @@ class Reader {
     // Accept rounding in hand-written or generated files; reject anything that is not meant to
     // be a unit quaternion.
     if (std::abs(q.norm() - 1.0) > 1e-6) {
-      fail_value(path, value, "a unit quaternion [w, x, y, z] (norm within 1e-6 of 1; this has norm " +
-                                  std::to_string(q.norm()) + ")");
+      fail_value(path, value,
+                 "a unit quaternion [w, x, y, z] (norm within 1e-6 of 1; this has norm " +
+                     std::to_string(q.norm()) + ")");
     }
     q.normalize();
     return q;
@@ -153,7 +154,8 @@ std::shared_ptr<const Shape> parse_shape(const Reader& r, const json& value,
     }
     if (type == "halfspace") {
       if (!allow_unbounded) {
-        r.fail(path + "/type", "a halfspace is unbounded: only a fixed or kinematic body may have one");
+        r.fail(path + "/type",
+               "a halfspace is unbounded: only a fixed or kinematic body may have one");
       }
       r.only_keys(value, path, {"type", "normal", "offset"});
       Vec3 n = r.vec3(r.required(value, path, "normal"), path + "/normal");
@@ -177,12 +179,15 @@ std::shared_ptr<const Shape> parse_shape(const Reader& r, const json& value,
         r.object(parts[i], part_path);
         r.only_keys(parts[i], part_path, {"shape", "position", "orientation"});
         CompoundPart part;
-        part.shape = parse_shape(r, r.required(parts[i], part_path, "shape"), part_path + "/shape",
-                                 /*allow_unbounded=*/false);
-        if (!std::holds_alternative<Sphere>(*part.shape) &&
-            !std::holds_alternative<ConvexPolyhedron>(*part.shape)) {
-          r.fail(part_path + "/shape", "a compound part must be a sphere, box, prism or convex");
+        const json& part_shape =
+            r.object(r.required(parts[i], part_path, "shape"), part_path + "/shape");
+        const json& part_type = r.required(part_shape, part_path + "/shape", "type");
+        if (part_type != "sphere" && part_type != "box" && part_type != "prism" &&
+            part_type != "convex") {
+          r.fail_value(part_path + "/shape/type", part_type,
+                       "a convex part: \"sphere\", \"box\", \"prism\" or \"convex\"");
         }
+        part.shape = parse_shape(r, part_shape, part_path + "/shape", /*allow_unbounded=*/false);
         if (parts[i].contains("position")) {
           part.position_M = r.vec3(parts[i]["position"], part_path + "/position");
         }
@@ -211,7 +216,8 @@ Material parse_material(const Reader& r, const json& value, const std::string& p
     r.only_keys(value, path, {"friction", "restitution"});
   }
   Material m = defaults;
-  if (value.contains("friction")) m.friction = r.non_negative(value["friction"], path + "/friction");
+  if (value.contains("friction"))
+    m.friction = r.non_negative(value["friction"], path + "/friction");
   if (value.contains("restitution")) {
     m.restitution = r.non_negative(value["restitution"], path + "/restitution");
     if (m.restitution > 1.0) {
@@ -295,10 +301,12 @@ Body parse_body(const Reader& r, const json& value, const std::string& path) {
     const json& k = r.object(motion["kinematic"], kpath);
     r.only_keys(k, kpath, {"angular_velocity", "point", "velocity"});
     if (k.contains("angular_velocity")) {
-      body.kinematic.angular_velocity_W = r.vec3(k["angular_velocity"], kpath + "/angular_velocity");
+      body.kinematic.angular_velocity_W =
+          r.vec3(k["angular_velocity"], kpath + "/angular_velocity");
     }
     if (k.contains("point")) body.kinematic.point_W = r.vec3(k["point"], kpath + "/point");
-    if (k.contains("velocity")) body.kinematic.velocity_W = r.vec3(k["velocity"], kpath + "/velocity");
+    if (k.contains("velocity"))
+      body.kinematic.velocity_W = r.vec3(k["velocity"], kpath + "/velocity");
   } else {
     r.fail_value(path + "/motion", motion,
                  "\"dynamic\", \"fixed\" or {\"kinematic\": {\"angular_velocity\": [..], "
@@ -339,8 +347,9 @@ Body parse_body(const Reader& r, const json& value, const std::string& path) {
   }
   if (body.motion == MotionKind::kKinematic &&
       (value.contains("velocity") || value.contains("angular_velocity"))) {
-    r.fail(path, "a kinematic body's velocities come from its \"motion\"; remove \"velocity\" / "
-                 "\"angular_velocity\"");
+    r.fail(path,
+           "a kinematic body's velocities come from its \"motion\"; remove \"velocity\" / "
+           "\"angular_velocity\"");
   }
   return body;
 }
@@ -366,12 +375,15 @@ Scene scene_from_json(const json& doc, const std::string& source) {
   if (doc.contains("output")) {
     const json& out = r.object(doc["output"], "/output");
     r.only_keys(out, "/output", {"interval"});
-    if (out.contains("interval")) scene.output_interval = r.positive(out["interval"], "/output/interval");
+    if (out.contains("interval"))
+      scene.output_interval = r.positive(out["interval"], "/output/interval");
   }
-  if (doc.contains("settings")) parse_settings(r, doc["settings"], "/settings", scene.world.settings);
+  if (doc.contains("settings"))
+    parse_settings(r, doc["settings"], "/settings", scene.world.settings);
 
   const json& bodies = r.required(doc, "", "bodies");
-  if (!bodies.is_array() || bodies.empty()) r.fail_value("/bodies", bodies, "a non-empty array of bodies");
+  if (!bodies.is_array() || bodies.empty())
+    r.fail_value("/bodies", bodies, "a non-empty array of bodies");
   std::set<std::string> names;
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     std::string path = "/bodies/" + std::to_string(i);
@@ -387,7 +399,7 @@ Scene scene_from_json(const json& doc, const std::string& source) {
     r.only_keys(materials, "/materials", {"default", "pairs"});
     if (materials.contains("default")) {
       scene.world.default_material = parse_material(r, materials["default"], "/materials/default",
-                                              scene.world.default_material, false);
+                                                    scene.world.default_material, false);
     }
     if (materials.contains("pairs")) {
       const json& pairs = materials["pairs"];
@@ -457,9 +469,9 @@ void apply_override(json& doc, const std::string& assignment) {
       if (last != "-") {
         std::size_t index = std::stoul(last);
         if (index >= parent.size()) {
-          throw InputError("--set " + assignment,
-                           "index " + last + " is past the end of the array at " +
-                               pointer.parent_pointer().to_string());
+          throw InputError("--set " + assignment, "index " + last +
+                                                      " is past the end of the array at " +
+                                                      pointer.parent_pointer().to_string());
         }
       }
     } else if (!parent.is_object()) {

@@ -13,7 +13,7 @@ namespace palpable {
 
 struct Scene {
   std::string name;
-  std::string source;  // file name (or "-") the scene came from, for messages
+  std::string source;            // file name (or "-") the scene came from, for messages
   double end_time = 0.0;         // [s]
   double output_interval = 0.0;  // [s]; 0: no samples
   World world;

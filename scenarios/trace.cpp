@@ -41,9 +41,9 @@ void write_trace_rows(std::ostream& out, double t, const std::vector<std::string
     const BodyState& s = states[i];
     put(out, t);
     out << ',' << names[i];
-    const double values[] = {s.x_W.x(),   s.x_W.y(),   s.x_W.z(),   s.q_WM.w(), s.q_WM.x(),
-                             s.q_WM.y(),  s.q_WM.z(),  s.v_W.x(),   s.v_W.y(),  s.v_W.z(),
-                             s.w_W.x(),   s.w_W.y(),   s.w_W.z()};
+    const double values[] = {s.x_W.x(),  s.x_W.y(),  s.x_W.z(), s.q_WM.w(), s.q_WM.x(),
+                             s.q_WM.y(), s.q_WM.z(), s.v_W.x(), s.v_W.y(),  s.v_W.z(),
+                             s.w_W.x(),  s.w_W.y(),  s.w_W.z()};
     for (double v : values) {
       out << ',';
       put(out, v);
@@ -57,7 +57,8 @@ Trace read_trace_csv(const std::string& path) {
   if (!in) throw InputError(path, "cannot open trace file");
   std::string line;
   if (!std::getline(in, line) || line.rfind(kTraceHeader, 0) != 0) {
-    throw InputError(path + ":1", std::string("expected the trace header \"") + kTraceHeader + "\"");
+    throw InputError(path + ":1",
+                     std::string("expected the trace header \"") + kTraceHeader + "\"");
   }
   Trace trace;
   std::map<std::string, std::size_t> index;
@@ -78,8 +79,7 @@ Trace read_trace_csv(const std::string& path) {
       const std::string& f = fields[k == 0 ? 0 : k + 1];
       auto result = std::from_chars(f.data(), f.data() + f.size(), v[k]);
       if (result.ec != std::errc() || result.ptr != f.data() + f.size()) {
-        throw InputError(path + ":" + std::to_string(line_number),
-                         "not a number: \"" + f + "\"");
+        throw InputError(path + ":" + std::to_string(line_number), "not a number: \"" + f + "\"");
       }
     }
     const std::string& name = fields[1];

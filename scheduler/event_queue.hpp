@@ -24,8 +24,8 @@ enum class EventKind : std::uint8_t {
 struct Event {
   double t = 0.0;
   EventKind kind = EventKind::kPairCheck;
-  BodyId a;  // for pair events a < b
-  BodyId b;  // invalid for single-body and global events
+  BodyId a;                    // for pair events a < b
+  BodyId b;                    // invalid for single-body and global events
   std::uint64_t sequence = 0;  // assigned by the queue on push/update
 };
 

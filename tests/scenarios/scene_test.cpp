@@ -76,7 +76,8 @@ TEST_CASE("overrides address the scene by JSON pointer", "[scenarios][scene]") {
   CHECK_THROWS_WITH(palpable::apply_override(doc, "/nothing/here=1"),
                     Catch::Contains("no such place"));
   CHECK_THROWS_WITH(palpable::apply_override(doc, "/bodies/7/mass=1"),
-                    Catch::Contains("past the end"));
+                    Catch::Contains("out of range"));
+  CHECK_THROWS_WITH(palpable::apply_override(doc, "/bodies/9=1"), Catch::Contains("past the end"));
 }
 
 TEST_CASE("a file that is not JSON is named in the error", "[scenarios][scene]") {

@@ -64,8 +64,8 @@ TEST_CASE("heap queue gives the identical event sequence as the reference queue"
   std::size_t pops = 0;
   for (int step = 0; step < 100000; ++step) {
     int o = op(rng);
-    Event e = make_event(now + 0.01 * tick(rng), static_cast<EventKind>(kind(rng)), body(rng),
-                         body(rng));
+    Event e =
+        make_event(now + 0.01 * tick(rng), static_cast<EventKind>(kind(rng)), body(rng), body(rng));
     if (o < 4 || live.empty()) {
       auto id_heap = heap.push(e);
       auto id_ref = reference.push(e);
