@@ -49,6 +49,17 @@ struct Settings {
   // Relative tolerance of the numerical free-rigid-body rotation where no closed form is used [-].
   double rotation_tolerance = 1e-13;
 
+  // Relative coplanarity tolerance of convex hulls built from points [-], times the diagonal of
+  // the points' bounding box: hull facets whose planes agree within it become one polygon face,
+  // and thinner point sets are rejected as coplanar. Larger merges more near-coplanar facets
+  // (fewer, slightly non-planar faces); smaller keeps them apart (more faces, slivers).
+  double hull_coplanar_tolerance = 1e-9;
+
+  // Relative tolerance under which principal moments of inertia count as equal [-], times the
+  // largest moment. Equal moments make the principal axes non-unique; they are then chosen by a
+  // fixed rule (DESIGN.md §2) so that the same shape always gets the same body frame.
+  double equal_moment_tolerance = 1e-10;
+
   // Events processed at one instant for one pair before the scheduler reports a rounding loop
   // and moves on (counted in the statistics, never silent).
   int retry_limit = 100;

@@ -6,6 +6,7 @@
 #include "core/types.hpp"
 
 #include <memory>
+#include <string>
 #include <variant>
 #include <vector>
 
@@ -33,9 +34,9 @@ struct HalfEdge {
 };
 
 struct PolyFace {
-  int half_edge = -1;         // any half-edge of the face
+  int half_edge = -1;            // any half-edge of the face
   Vec3 normal_M = Vec3::Zero();  // unit outward normal
-  double offset = 0.0;        // plane: normal_M . x = offset
+  double offset = 0.0;           // plane: normal_M . x = offset
 };
 
 class ConvexPolyhedron {
@@ -51,6 +52,12 @@ class ConvexPolyhedron {
   // Regular n-gonal prism, axis along z, centred at the origin; vertices on radius `radius`,
   // the first at +x. A coin or cylinder as sides grow.
   static ConvexPolyhedron prism(double radius, double half_height, int sides);
+  // A polyhedron from its vertices and its faces, each face a list of vertex indices
+  // counter-clockwise about the outward normal. Validated like from_points (throws InputError
+  // naming the defect); not recentred. `tolerance_m` bounds the planarity and convexity errors.
+  static ConvexPolyhedron from_faces(const std::vector<Vec3>& vertices,
+                                     const std::vector<std::vector<int>>& faces,
+                                     double tolerance_m);
 
   const std::vector<Vec3>& vertices() const { return vertices_; }
   const std::vector<HalfEdge>& half_edges() const { return half_edges_; }
@@ -58,7 +65,9 @@ class ConvexPolyhedron {
   // One half-edge leaving each vertex (its tail is the vertex).
   const std::vector<int>& vertex_half_edge() const { return vertex_half_edge_; }
   int num_edges() const { return static_cast<int>(half_edges_.size()) / 2; }
-  const Vec3& head(int half_edge) const { return vertices_[half_edges_[half_edges_[half_edge].twin].tail]; }
+  const Vec3& head(int half_edge) const {
+    return vertices_[half_edges_[half_edges_[half_edge].twin].tail];
+  }
   const Vec3& tail(int half_edge) const { return vertices_[half_edges_[half_edge].tail]; }
 
   // The vertex maximising direction_M . v (a support point), in M.
@@ -77,6 +86,16 @@ class ConvexPolyhedron {
   Vec3 com_shift_M_ = Vec3::Zero();
 };
 
+// The first broken invariant of a polyhedron's half-edge mesh, or "" if it is valid: twin/next/prev
+// consistency, face loops, vertex degree >= 3, Euler V - E + F = 2, unit normals, planar convex
+// faces (within `tolerance_m`), every vertex inside every face plane (outward normals).
+std::string polyhedron_defect(const ConvexPolyhedron& polyhedron, double tolerance_m);
+
+// Validated builders: a positive finite radius; a non-zero finite normal (normalised) and a finite
+// offset. Throw InputError naming the argument.
+Sphere make_sphere(double radius);
+Halfspace make_halfspace(const Vec3& normal_M, double offset);
+
 struct CompoundPart;
 
 // A union of convex pieces, for fixed non-convex bodies (a dish, a table with cushions). Each
@@ -93,6 +112,11 @@ struct CompoundPart {
   Vec3 position_M = Vec3::Zero();
   Quat orientation_M = Quat::Identity();
 };
+
+// A compound from its parts, validated: at least one part, each a Sphere or ConvexPolyhedron
+// (convex and bounded), a finite position and a unit (within 1e-9) orientation, which is
+// normalised. Throws InputError naming the part.
+Compound make_compound(std::vector<CompoundPart> parts);
 
 // True for shapes a dynamic body may have (finite volume).
 bool is_bounded(const Shape& shape);

@@ -1,0 +1,498 @@
+// Shapes: half-edge convex polyhedra (built directly or from a Qhull hull with coplanar facets
+// merged into polygon faces), validation, support points and bounding boxes (DESIGN.md §2-3).
+#include "core/shape.hpp"
+
+#include "core/check.hpp"
+#include "core/convex_hull.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <sstream>
+#include <utility>
+
+namespace palpable {
+
+namespace {
+
+std::string format_vec(const Vec3& v) {
+  std::ostringstream os;
+  os.precision(17);
+  os << "(" << v.x() << ", " << v.y() << ", " << v.z() << ")";
+  return os.str();
+}
+
+bool is_finite(const Vec3& v) {
+  return v.allFinite();
+}
+
+// Newell's method: the area-weighted normal of a closed polygon (twice the vector area).
+Vec3 newell_normal(const std::vector<Vec3>& vertices, const std::vector<int>& loop) {
+  Vec3 n = Vec3::Zero();
+  const std::size_t count = loop.size();
+  for (std::size_t i = 0; i < count; ++i) {
+    const Vec3& a = vertices[loop[i]];
+    const Vec3& b = vertices[loop[(i + 1) % count]];
+    n += a.cross(b);
+  }
+  return n;
+}
+
+}  // namespace
+
+// Builds the half-edge mesh of a polyhedron from polygon loops; the only code that writes a
+// ConvexPolyhedron's members.
+class ConvexPolyhedronBuilder {
+ public:
+  // `faces`: vertex-index loops counter-clockwise about the outward normal. `normals`/`offsets`:
+  // the face planes (computed from the loops when empty). Unused vertices are dropped. Returns
+  // "" or the defect that stops the mesh from being built.
+  static std::string build(const std::vector<Vec3>& vertices,
+                           const std::vector<std::vector<int>>& faces,
+                           const std::vector<Vec3>& normals, const std::vector<double>& offsets,
+                           ConvexPolyhedron* out) {
+    ConvexPolyhedron p;
+    // Used vertices keep their order (box vertex i has the sign bits of i; prism vertex k is at
+    // angle 2 pi k / n; hull vertices follow the input points).
+    std::vector<int> new_index(vertices.size(), -1);
+    for (const auto& loop : faces) {
+      if (loop.size() < 3) return "a face has fewer than 3 vertices";
+      for (int v : loop) {
+        if (v < 0 || v >= static_cast<int>(vertices.size())) return "a face index is out of range";
+        new_index[v] = 0;
+      }
+    }
+    for (std::size_t v = 0; v < vertices.size(); ++v) {
+      if (new_index[v] < 0) continue;
+      new_index[v] = static_cast<int>(p.vertices_.size());
+      p.vertices_.push_back(vertices[v]);
+    }
+    std::map<std::pair<int, int>, int> by_ends;
+    p.vertex_half_edge_.assign(p.vertices_.size(), -1);
+    for (std::size_t f = 0; f < faces.size(); ++f) {
+      const auto& loop = faces[f];
+      const int first = static_cast<int>(p.half_edges_.size());
+      const int count = static_cast<int>(loop.size());
+      std::vector<int> mapped(loop.size());
+      for (int i = 0; i < count; ++i) mapped[i] = new_index[loop[i]];
+      for (int i = 0; i < count; ++i) {
+        HalfEdge h;
+        h.tail = mapped[i];
+        h.next = first + (i + 1) % count;
+        h.prev = first + (i + count - 1) % count;
+        h.face = static_cast<int>(f);
+        const int index = first + i;
+        if (!by_ends.emplace(std::make_pair(h.tail, mapped[(i + 1) % count]), index).second) {
+          return "an edge is used twice in the same direction (faces not consistently oriented)";
+        }
+        if (p.vertex_half_edge_[h.tail] < 0) p.vertex_half_edge_[h.tail] = index;
+        p.half_edges_.push_back(h);
+      }
+      PolyFace face;
+      face.half_edge = first;
+      if (normals.empty()) {
+        const Vec3 n = newell_normal(p.vertices_, mapped);
+        if (!(n.norm() > 0.0)) return "a face has zero area";
+        face.normal_M = n.normalized();
+        double sum = 0.0;
+        for (int v : mapped) sum += face.normal_M.dot(p.vertices_[v]);
+        face.offset = sum / count;
+      } else {
+        face.normal_M = normals[f];
+        face.offset = offsets[f];
+      }
+      p.faces_.push_back(face);
+    }
+    for (auto& h : p.half_edges_) {
+      const int head = p.half_edges_[h.next].tail;
+      const auto it = by_ends.find(std::make_pair(head, h.tail));
+      if (it == by_ends.end())
+        return "an edge belongs to only one face (the surface is not closed)";
+      h.twin = it->second;
+    }
+    p.max_radius_ = 0.0;
+    for (const Vec3& v : p.vertices_) p.max_radius_ = std::max(p.max_radius_, v.norm());
+    *out = std::move(p);
+    return "";
+  }
+
+  static void shift(ConvexPolyhedron* p, const Vec3& shift_M) {
+    for (Vec3& v : p->vertices_) v -= shift_M;
+    for (PolyFace& f : p->faces_) f.offset -= f.normal_M.dot(shift_M);
+    p->max_radius_ = 0.0;
+    for (const Vec3& v : p->vertices_) p->max_radius_ = std::max(p->max_radius_, v.norm());
+    p->com_shift_M_ = shift_M;
+  }
+};
+
+namespace {
+
+// Centroid of the solid by a fan of tetrahedra from the vertex mean (exact for any closed
+// polyhedron with planar faces); the origin of the modelling frame of hulls.
+Vec3 solid_centroid(const ConvexPolyhedron& p) {
+  Vec3 reference = Vec3::Zero();
+  for (const Vec3& v : p.vertices()) reference += v;
+  reference /= static_cast<double>(p.vertices().size());
+  double volume = 0.0;
+  Vec3 moment = Vec3::Zero();
+  for (const PolyFace& f : p.faces()) {
+    const int h0 = f.half_edge;
+    const Vec3 a = p.tail(h0) - reference;
+    for (int h = p.half_edges()[h0].next; p.half_edges()[h].next != h0;
+         h = p.half_edges()[h].next) {
+      const Vec3 b = p.tail(h) - reference;
+      const Vec3 c = p.head(h) - reference;
+      const double v6 = a.dot(b.cross(c));
+      volume += v6;
+      moment += v6 * (a + b + c);
+    }
+  }
+  return reference + moment / (4.0 * volume);
+}
+
+}  // namespace
+
+ConvexPolyhedron ConvexPolyhedron::from_faces(const std::vector<Vec3>& vertices,
+                                              const std::vector<std::vector<int>>& faces,
+                                              double tolerance_m) {
+  for (std::size_t i = 0; i < vertices.size(); ++i) {
+    if (!is_finite(vertices[i])) {
+      throw InputError("vertices", "vertex " + std::to_string(i) + " has a non-finite coordinate");
+    }
+  }
+  ConvexPolyhedron p;
+  const std::string built = ConvexPolyhedronBuilder::build(vertices, faces, {}, {}, &p);
+  if (!built.empty()) throw InputError("faces", built);
+  const std::string defect = polyhedron_defect(p, tolerance_m);
+  if (!defect.empty()) throw InputError("faces", defect);
+  return p;
+}
+
+ConvexPolyhedron ConvexPolyhedron::from_points(const std::vector<Vec3>& points,
+                                               double coplanar_tolerance) {
+  HullPolygons hull = convex_hull_polygons(points, coplanar_tolerance);
+  ConvexPolyhedron p;
+  std::string defect =
+      ConvexPolyhedronBuilder::build(hull.vertices, hull.faces, hull.normals, hull.offsets, &p);
+  if (defect.empty()) defect = polyhedron_defect(p, hull.tolerance_m);
+  if (!defect.empty() && hull.merged) {
+    // The tolerance-merged faces did not close into a valid mesh (near-degenerate input): fall
+    // back to Qhull's own facets, which are consistent by construction.
+    hull = convex_hull_polygons(points, 0.0);
+    defect =
+        ConvexPolyhedronBuilder::build(hull.vertices, hull.faces, hull.normals, hull.offsets, &p);
+    if (defect.empty()) defect = polyhedron_defect(p, hull.tolerance_m);
+  }
+  if (!defect.empty()) {
+    throw InputError("points", "the convex hull is degenerate at the coplanarity tolerance " +
+                                   std::to_string(hull.tolerance_m) + " m: " + defect);
+  }
+  ConvexPolyhedronBuilder::shift(&p, solid_centroid(p));
+  return p;
+}
+
+ConvexPolyhedron ConvexPolyhedron::box(const Vec3& half_extents) {
+  for (int i = 0; i < 3; ++i) {
+    if (!(std::isfinite(half_extents[i]) && half_extents[i] > 0.0)) {
+      throw InputError("half_extents",
+                       "must be positive and finite, got " + format_vec(half_extents));
+    }
+  }
+  const double x = half_extents.x();
+  const double y = half_extents.y();
+  const double z = half_extents.z();
+  // Vertex i has coordinate signs from its bits: bit 0 -> x, bit 1 -> y, bit 2 -> z.
+  std::vector<Vec3> vertices;
+  for (int i = 0; i < 8; ++i) {
+    vertices.emplace_back((i & 1) ? x : -x, (i & 2) ? y : -y, (i & 4) ? z : -z);
+  }
+  const std::vector<std::vector<int>> faces = {
+      {1, 3, 7, 5}, {0, 4, 6, 2},  // +x, -x
+      {2, 6, 7, 3}, {0, 1, 5, 4},  // +y, -y
+      {4, 5, 7, 6}, {0, 2, 3, 1},  // +z, -z
+  };
+  const std::vector<Vec3> normals = {Vec3::UnitX(),  -Vec3::UnitX(), Vec3::UnitY(),
+                                     -Vec3::UnitY(), Vec3::UnitZ(),  -Vec3::UnitZ()};
+  const std::vector<double> offsets = {x, x, y, y, z, z};
+  ConvexPolyhedron p;
+  const std::string defect = ConvexPolyhedronBuilder::build(vertices, faces, normals, offsets, &p);
+  PALPABLE_CHECK(defect.empty(), defect);
+  return p;
+}
+
+ConvexPolyhedron ConvexPolyhedron::prism(double radius, double half_height, int sides) {
+  if (!(std::isfinite(radius) && radius > 0.0)) {
+    throw InputError("radius", "must be positive and finite, got " + std::to_string(radius));
+  }
+  if (!(std::isfinite(half_height) && half_height > 0.0)) {
+    throw InputError("half_height",
+                     "must be positive and finite, got " + std::to_string(half_height));
+  }
+  if (sides < 3) {
+    throw InputError("sides", "a prism needs at least 3 sides, got " + std::to_string(sides));
+  }
+  const double kPi = 3.14159265358979323846;
+  // Vertices 0..n-1 on the bottom (z = -h), n..2n-1 on the top, vertex k at angle 2 pi k / n.
+  std::vector<Vec3> vertices(2 * sides);
+  for (int k = 0; k < sides; ++k) {
+    const double angle = 2.0 * kPi * k / sides;
+    const double c = radius * std::cos(angle);
+    const double s = radius * std::sin(angle);
+    vertices[k] = Vec3(c, s, -half_height);
+    vertices[sides + k] = Vec3(c, s, half_height);
+  }
+  std::vector<std::vector<int>> faces;
+  std::vector<Vec3> normals;
+  std::vector<double> offsets;
+  std::vector<int> top(sides), bottom(sides);
+  for (int k = 0; k < sides; ++k) {
+    top[k] = sides + k;
+    bottom[k] = sides - 1 - k;
+  }
+  faces.push_back(top);
+  normals.push_back(Vec3::UnitZ());
+  offsets.push_back(half_height);
+  faces.push_back(bottom);
+  normals.push_back(-Vec3::UnitZ());
+  offsets.push_back(half_height);
+  const double apothem = radius * std::cos(kPi / sides);
+  for (int k = 0; k < sides; ++k) {
+    const int k1 = (k + 1) % sides;
+    faces.push_back({k, k1, sides + k1, sides + k});
+    const double angle = (2.0 * k + 1.0) * kPi / sides;
+    normals.emplace_back(std::cos(angle), std::sin(angle), 0.0);
+    offsets.push_back(apothem);
+  }
+  ConvexPolyhedron p;
+  const std::string defect = ConvexPolyhedronBuilder::build(vertices, faces, normals, offsets, &p);
+  PALPABLE_CHECK(defect.empty(), defect);
+  return p;
+}
+
+Vec3 ConvexPolyhedron::support(const Vec3& direction_M) const {
+  // Linear scan over the vertices. A hill-climb over the half-edge graph (from a cached start
+  // vertex) is the planned upgrade for polyhedra with many vertices.
+  int best = 0;
+  double best_dot = direction_M.dot(vertices_[0]);
+  for (int i = 1; i < static_cast<int>(vertices_.size()); ++i) {
+    const double d = direction_M.dot(vertices_[i]);
+    if (d > best_dot) {
+      best_dot = d;
+      best = i;
+    }
+  }
+  return vertices_[best];
+}
+
+std::string polyhedron_defect(const ConvexPolyhedron& p, double tolerance_m) {
+  const auto& hs = p.half_edges();
+  const auto& vs = p.vertices();
+  const auto& fs = p.faces();
+  const int num_h = static_cast<int>(hs.size());
+  const int num_v = static_cast<int>(vs.size());
+  const int num_f = static_cast<int>(fs.size());
+  auto fail = [](const std::string& what, int index) {
+    return what + " (index " + std::to_string(index) + ")";
+  };
+  if (num_v < 4 || num_f < 4 || num_h % 2 != 0) return "too few vertices or faces";
+  auto valid = [](int i, int n) { return i >= 0 && i < n; };
+  for (int h = 0; h < num_h; ++h) {
+    const HalfEdge& e = hs[h];
+    if (!valid(e.tail, num_v) || !valid(e.twin, num_h) || !valid(e.next, num_h) ||
+        !valid(e.prev, num_h) || !valid(e.face, num_f)) {
+      return fail("half-edge index out of range", h);
+    }
+    if (e.twin == h || hs[e.twin].twin != h) return fail("twin of twin is not the half-edge", h);
+    if (hs[e.next].prev != h || hs[e.prev].next != h) return fail("next/prev not inverse", h);
+    if (hs[e.next].face != e.face) return fail("next leaves the face", h);
+    if (hs[e.twin].tail != hs[e.next].tail) return fail("twin does not run the other way", h);
+    if (hs[e.twin].face == e.face) return fail("both sides of an edge on the same face", h);
+  }
+  if (static_cast<int>(p.vertex_half_edge().size()) != num_v) return "vertex_half_edge size";
+  for (int v = 0; v < num_v; ++v) {
+    const int h0 = p.vertex_half_edge()[v];
+    if (!valid(h0, num_h) || hs[h0].tail != v) return fail("vertex_half_edge wrong", v);
+    // Walk the half-edges leaving v: the next one is twin(prev(h)).
+    int degree = 0;
+    int h = h0;
+    do {
+      ++degree;
+      h = hs[hs[h].prev].twin;
+      if (hs[h].tail != v || degree > num_h) return fail("vertex star broken", v);
+    } while (h != h0);
+    if (degree < 3) return fail("vertex of degree < 3", v);
+  }
+  std::vector<int> visits(num_h, 0);
+  for (int f = 0; f < num_f; ++f) {
+    const PolyFace& face = fs[f];
+    if (!valid(face.half_edge, num_h) || hs[face.half_edge].face != f) {
+      return fail("face half_edge wrong", f);
+    }
+    if (!(std::abs(face.normal_M.norm() - 1.0) <= 1e-12)) return fail("face normal not unit", f);
+    std::vector<int> loop;
+    int h = face.half_edge;
+    do {
+      loop.push_back(hs[h].tail);
+      ++visits[h];
+      h = hs[h].next;
+      if (static_cast<int>(loop.size()) > num_h) return fail("face loop does not close", f);
+    } while (h != face.half_edge);
+    if (loop.size() < 3) return fail("face with fewer than 3 vertices", f);
+    if (newell_normal(vs, loop).dot(face.normal_M) <= 0.0) {
+      return fail("face loop not counter-clockwise about its normal", f);
+    }
+    const std::size_t count = loop.size();
+    for (std::size_t i = 0; i < count; ++i) {
+      const Vec3& a = vs[loop[i]];
+      const Vec3& b = vs[loop[(i + 1) % count]];
+      const Vec3& c = vs[loop[(i + 2) % count]];
+      if (std::abs(face.normal_M.dot(a) - face.offset) > tolerance_m) {
+        return fail("face not planar", f);
+      }
+      // Convex corner at b: c lies left of the line a->b (seen from outside), within tolerance.
+      const Vec3 ab = b - a;
+      const Vec3 side = face.normal_M.cross(ab);
+      if (side.dot(c - b) < -tolerance_m * ab.norm()) return fail("face not convex", f);
+    }
+    for (int v = 0; v < num_v; ++v) {
+      if (face.normal_M.dot(vs[v]) - face.offset > tolerance_m) {
+        return fail("a vertex lies outside a face plane (not convex or normal not outward)", f);
+      }
+    }
+  }
+  for (int h = 0; h < num_h; ++h) {
+    if (visits[h] != 1) return fail("half-edge not on exactly one face loop", h);
+  }
+  if (num_v - num_h / 2 + num_f != 2) return "Euler characteristic V - E + F != 2";
+  return "";
+}
+
+Sphere make_sphere(double radius) {
+  if (!(std::isfinite(radius) && radius > 0.0)) {
+    throw InputError("radius", "must be positive and finite, got " + std::to_string(radius));
+  }
+  return Sphere{radius};
+}
+
+Halfspace make_halfspace(const Vec3& normal_M, double offset) {
+  const double length = normal_M.norm();
+  if (!(is_finite(normal_M) && length > 0.0 && std::isfinite(length))) {
+    throw InputError("normal", "must be a finite non-zero vector, got " + format_vec(normal_M));
+  }
+  if (!std::isfinite(offset)) throw InputError("offset", "must be finite");
+  return Halfspace{normal_M / length, offset};
+}
+
+Compound make_compound(std::vector<CompoundPart> parts) {
+  if (parts.empty()) throw InputError("parts", "a compound needs at least one part");
+  for (std::size_t i = 0; i < parts.size(); ++i) {
+    const std::string where = "parts/" + std::to_string(i);
+    CompoundPart& part = parts[i];
+    if (!part.shape) throw InputError(where, "has no shape");
+    if (!std::holds_alternative<Sphere>(*part.shape) &&
+        !std::holds_alternative<ConvexPolyhedron>(*part.shape)) {
+      throw InputError(where, "must be a sphere or a convex polyhedron (convex and bounded)");
+    }
+    if (!is_finite(part.position_M)) throw InputError(where + "/position", "must be finite");
+    const double norm = part.orientation_M.norm();
+    if (!(std::isfinite(norm) && std::abs(norm - 1.0) <= 1e-9)) {
+      throw InputError(where + "/orientation", "must be a unit quaternion");
+    }
+    part.orientation_M.normalize();
+  }
+  return Compound{std::move(parts)};
+}
+
+namespace {
+
+template <class... Ts>
+struct Overloaded : Ts... {
+  using Ts::operator()...;
+};
+template <class... Ts>
+Overloaded(Ts...) -> Overloaded<Ts...>;
+
+}  // namespace
+
+bool is_bounded(const Shape& shape) {
+  return std::visit(
+      Overloaded{[](const Sphere&) { return true; }, [](const ConvexPolyhedron&) { return true; },
+                 [](const Halfspace&) { return false; },
+                 [](const Compound& c) {
+                   if (c.parts.empty()) return false;
+                   for (const CompoundPart& part : c.parts) {
+                     if (!part.shape || !is_bounded(*part.shape)) return false;
+                   }
+                   return true;
+                 }},
+      shape);
+}
+
+double max_radius(const Shape& shape) {
+  return std::visit(Overloaded{[](const Sphere& s) { return s.radius; },
+                               [](const ConvexPolyhedron& p) { return p.max_radius(); },
+                               [](const Halfspace&) { return kInfinity; },
+                               [](const Compound& c) {
+                                 double r = 0.0;
+                                 for (const CompoundPart& part : c.parts) {
+                                   r = std::max(r,
+                                                part.position_M.norm() + max_radius(*part.shape));
+                                 }
+                                 return r;
+                               }},
+                    shape);
+}
+
+Vec3 support_W(const Shape& shape, const Vec3& p_W, const Quat& q_WM, const Vec3& direction_W) {
+  if (const auto* sphere = std::get_if<Sphere>(&shape)) {
+    const double length = direction_W.norm();
+    if (!(length > 0.0)) return p_W;
+    return p_W + (sphere->radius / length) * direction_W;
+  }
+  if (const auto* poly = std::get_if<ConvexPolyhedron>(&shape)) {
+    return p_W + q_WM * poly->support(q_WM.conjugate() * direction_W);
+  }
+  PALPABLE_CHECK(false, "support_W needs a sphere or a convex polyhedron");
+  return p_W;
+}
+
+Aabb bounding_box_W(const Shape& shape, const Vec3& p_W, const Quat& q_WM) {
+  Aabb box;
+  if (const auto* sphere = std::get_if<Sphere>(&shape)) {
+    box.min_W = p_W - Vec3::Constant(sphere->radius);
+    box.max_W = p_W + Vec3::Constant(sphere->radius);
+  } else if (const auto* poly = std::get_if<ConvexPolyhedron>(&shape)) {
+    const Mat3 R_WM = q_WM.toRotationMatrix();
+    for (const Vec3& v : poly->vertices()) {
+      const Vec3 v_W = p_W + R_WM * v;
+      box.min_W = box.min_W.cwiseMin(v_W);
+      box.max_W = box.max_W.cwiseMax(v_W);
+    }
+  } else if (const auto* half = std::get_if<Halfspace>(&shape)) {
+    box.min_W = Vec3::Constant(-kInfinity);
+    box.max_W = Vec3::Constant(kInfinity);
+    // Bounded on one side only when the world normal is exactly along an axis; a tilted plane
+    // reaches every coordinate's infinity.
+    const Vec3 n_W = q_WM * half->normal_M;
+    const double offset_W = half->offset + n_W.dot(p_W);
+    for (int k = 0; k < 3; ++k) {
+      const int i = (k + 1) % 3;
+      const int j = (k + 2) % 3;
+      if (n_W[i] != 0.0 || n_W[j] != 0.0 || n_W[k] == 0.0) continue;
+      if (n_W[k] > 0.0) {
+        box.max_W[k] = offset_W / n_W[k];
+      } else {
+        box.min_W[k] = offset_W / n_W[k];
+      }
+    }
+  } else {
+    const auto& compound = std::get<Compound>(shape);
+    for (const CompoundPart& part : compound.parts) {
+      box.extend(
+          bounding_box_W(*part.shape, p_W + q_WM * part.position_M, q_WM * part.orientation_M));
+    }
+  }
+  return box;
+}
+
+}  // namespace palpable

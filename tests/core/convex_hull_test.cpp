@@ -1,0 +1,156 @@
+// Convex hulls from points: merged coplanar facets (exact face/edge/vertex counts), dropped
+// interior and duplicate points, and rejection of inputs without a solid hull.
+#include "core/convex_hull.hpp"
+
+#include "core/check.hpp"
+#include "core/shape.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+using namespace palpable;
+
+namespace {
+
+std::vector<Vec3> box_corners(const Vec3& half, const Vec3& centre, const Quat& q) {
+  std::vector<Vec3> corners;
+  for (int i = 0; i < 8; ++i) {
+    const Vec3 c((i & 1) ? half.x() : -half.x(), (i & 2) ? half.y() : -half.y(),
+                 (i & 4) ? half.z() : -half.z());
+    corners.push_back(centre + q * c);
+  }
+  return corners;
+}
+
+void require_counts(const ConvexPolyhedron& p, int v, int e, int f) {
+  CHECK(static_cast<int>(p.vertices().size()) == v);
+  CHECK(p.num_edges() == e);
+  CHECK(static_cast<int>(p.faces().size()) == f);
+}
+
+}  // namespace
+
+TEST_CASE("Box from its 8 corners has 6 faces, 12 edges, 8 vertices") {
+  const Vec3 half(0.3, 0.5, 0.7);
+  SECTION("axis-aligned, off-centre") {
+    const auto p =
+        ConvexPolyhedron::from_points(box_corners(half, Vec3(1, 2, 3), Quat::Identity()));
+    require_counts(p, 8, 12, 6);
+    CHECK(polyhedron_defect(p, 1e-12) == "");
+    CHECK((p.com_shift_M() - Vec3(1, 2, 3)).norm() < 1e-14);
+    for (const Vec3& v : p.vertices()) {
+      CHECK((v.cwiseAbs() - half).norm() < 1e-14);
+    }
+  }
+  SECTION("rotated: rounding makes the faces only nearly planar") {
+    const Quat q = Quat(Eigen::AngleAxisd(0.7, Vec3(1, 2, 3).normalized()));
+    const auto p = ConvexPolyhedron::from_points(box_corners(half, Vec3(-4, 5, 0.5), q));
+    require_counts(p, 8, 12, 6);
+    CHECK(polyhedron_defect(p, 1e-12) == "");
+  }
+}
+
+TEST_CASE("Cube with interior, duplicate and edge/face-midpoint points keeps only the corners") {
+  std::vector<Vec3> points = box_corners(Vec3(1, 1, 1), Vec3::Zero(), Quat::Identity());
+  std::mt19937_64 rng(20261121);
+  std::uniform_real_distribution<double> u(-0.99, 0.99);
+  for (int i = 0; i < 200; ++i) points.emplace_back(u(rng), u(rng), u(rng));
+  for (int i = 0; i < 8; ++i) points.push_back(points[i]);  // duplicates
+  points.emplace_back(1.0, 0.0, 0.0);                       // a face centre
+  points.emplace_back(1.0, 1.0, 0.25);                      // on an edge
+  points.emplace_back(0.5, -1.0, 0.5);                      // on a face
+  const auto p = ConvexPolyhedron::from_points(points);
+  require_counts(p, 8, 12, 6);
+  CHECK(polyhedron_defect(p, 1e-12) == "");
+  CHECK(p.com_shift_M().norm() < 1e-14);
+}
+
+TEST_CASE("Prism from points: 2n vertices, 3n edges, n + 2 faces") {
+  for (int n : {3, 4, 5, 7, 16, 64}) {
+    CAPTURE(n);
+    std::vector<Vec3> points;
+    for (int k = 0; k < n; ++k) {
+      const double a = 2.0 * M_PI * k / n;
+      points.emplace_back(0.4 * std::cos(a), 0.4 * std::sin(a), -0.1);
+      points.emplace_back(0.4 * std::cos(a), 0.4 * std::sin(a), 0.1);
+    }
+    const auto p = ConvexPolyhedron::from_points(points);
+    require_counts(p, 2 * n, 3 * n, n + 2);
+    CHECK(polyhedron_defect(p, 1e-12) == "");
+  }
+}
+
+TEST_CASE("Hull polygons of a tetrahedron are its four triangles") {
+  const std::vector<Vec3> points = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1),
+                                    Vec3(0.1, 0.1, 0.1)};
+  const HullPolygons hull = convex_hull_polygons(points, -1.0);
+  REQUIRE(hull.faces.size() == 4);
+  for (const auto& loop : hull.faces) CHECK(loop.size() == 3);
+  for (std::size_t f = 0; f < 4; ++f) {
+    for (int v : hull.faces[f]) CHECK(v != 4);
+    CHECK(std::abs(hull.normals[f].norm() - 1.0) < 1e-15);
+  }
+}
+
+TEST_CASE("Hulls reject inputs without a solid, saying why") {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  auto message = [](const std::vector<Vec3>& points) {
+    try {
+      ConvexPolyhedron::from_points(points);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  using Catch::Matchers::Contains;
+  CHECK_THAT(message({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, nan)}),
+             Contains("points/3") && Contains("non-finite"));
+  CHECK_THAT(message({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)}),
+             Contains("at least 4 points, got 3"));
+  CHECK_THAT(
+      message({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(1, 1, 0), Vec3(0.3, 0.2, 0)}),
+      Contains("coplanar"));
+  CHECK_THAT(message({Vec3(0, 0, 0), Vec3(1, 1, 1), Vec3(2, 2, 2), Vec3(-1, -1, -1)}),
+             Contains("collinear"));
+  CHECK_THAT(message(std::vector<Vec3>(6, Vec3(1, 2, 3))), Contains("identical"));
+  // Thinner than the coplanarity tolerance counts as coplanar.
+  CHECK_THAT(message({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(1, 1, 1e-12)}),
+             Contains("coplanar"));
+}
+
+TEST_CASE("Many points on the faces of a rotated box merge into its 6 faces") {
+  const std::uint64_t seed = 4242;
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int trial = 0; trial < 10; ++trial) {
+    CAPTURE(seed, trial);
+    const Vec3 half(0.5 + 0.4 * u(rng), 0.5 + 0.4 * u(rng), 0.5 + 0.4 * u(rng));
+    const Quat q = Quat(u(rng), u(rng), u(rng), u(rng)).normalized();
+    const Vec3 centre(3 * u(rng), 3 * u(rng), 3 * u(rng));
+    std::vector<Vec3> points = box_corners(half, centre, q);
+    for (int i = 0; i < 300; ++i) {
+      Vec3 local(u(rng) * half.x(), u(rng) * half.y(), u(rng) * half.z());
+      const int axis = i % 3;
+      local[axis] = (i % 2 ? 1.0 : -1.0) * half[axis];
+      points.push_back(centre + q * local);
+    }
+    const auto p = ConvexPolyhedron::from_points(points);
+    require_counts(p, 8, 12, 6);
+    CHECK(polyhedron_defect(p, 1e-12) == "");
+    CHECK((p.com_shift_M() - centre).norm() < 1e-13);
+  }
+}
+
+TEST_CASE("Hull of points on a sphere is a valid triangulated-or-merged mesh") {
+  std::mt19937_64 rng(8);
+  std::normal_distribution<double> g(0.0, 1.0);
+  std::vector<Vec3> points;
+  for (int i = 0; i < 2000; ++i) points.push_back(Vec3(g(rng), g(rng), g(rng)).normalized());
+  const auto p = ConvexPolyhedron::from_points(points);
+  CHECK(polyhedron_defect(p, 1e-9 * 2 * std::sqrt(3.0)) == "");
+  CHECK(p.vertices().size() == 2000);
+  CHECK(p.max_radius() <= 1.0 + 1e-3);
+}
