@@ -25,14 +25,20 @@ Vec3 closest_point_segment(const Vec3& p, const Vec3& q, const Vec3& x) {
 
 double closest_points_segment_segment(const Vec3& p1, const Vec3& q1, const Vec3& p2,
                                       const Vec3& q2, Vec3& c1, Vec3& c2) {
+  double s, t;
+  return closest_params_segment_segment(p1, q1, p2, q2, s, t, c1, c2);
+}
+
+double closest_params_segment_segment(const Vec3& p1, const Vec3& q1, const Vec3& p2,
+                                      const Vec3& q2, double& s, double& t, Vec3& c1, Vec3& c2) {
   const Vec3 d1 = q1 - p1;
   const Vec3 d2 = q2 - p2;
   const Vec3 r = p1 - p2;
   const double a = d1.squaredNorm();
   const double e = d2.squaredNorm();
   const double f = d2.dot(r);
-  double s = 0.0;
-  double t = 0.0;
+  s = 0.0;
+  t = 0.0;
   if (a <= 0.0 && e <= 0.0) {
     c1 = p1;
     c2 = p2;
@@ -65,7 +71,9 @@ double closest_points_segment_segment(const Vec3& p1, const Vec3& q1, const Vec3
 
 namespace {
 
-enum class Step { kContinue, kDone, kPenetrating };
+// kZero: the features meet (distance exactly 0) and the walk cannot tell touching from overlap;
+// resolved by a local separating-axis test at the end.
+enum class Step { kContinue, kDone, kPenetrating, kZero };
 
 // The part [lo, hi] of the edge e(l) = tail + l (head - tail) inside a Voronoi region, with the
 // neighbours across the planes that cut it (Mirtich 1998, figure 7, "ClipEdge").
@@ -195,23 +203,27 @@ struct Solver {
     const int v = f[iv].index;
     const int face = f[iF].index;
     const Vec3 p = to(iF, mv.vertex(v));
-    // V outside the face's side planes: move to the nearest boundary edge whose plane it
-    // violates (the distance to F is then the distance to that edge: a downward move that keeps
-    // the distance).
-    int best = -1;
+    // V outside the face's side planes: move to the boundary feature of F nearest to V among the
+    // edges whose planes it violates — the edge, or its end vertex where the boundary comes
+    // closest at a corner (the distance to F is the distance to it: a downward move).
+    Feature best;
     double best_d2 = kInfinity;
     for (const VoronoiPlane* q = mf.face_planes_begin(face); q != mf.face_planes_end(face); ++q) {
       if (q->eval(p) < 0.0) {
         const int h = q->neighbor.index;
-        const double d2 = (closest_point_segment(mf.tail(h), mf.head(h), p) - p).squaredNorm();
+        const Vec3 d = mf.head(h) - mf.tail(h);
+        const double s = std::clamp((p - mf.tail(h)).dot(d) / d.squaredNorm(), 0.0, 1.0);
+        const double d2 = (mf.tail(h) + s * d - p).squaredNorm();
         if (d2 < best_d2) {
           best_d2 = d2;
-          best = h;
+          best = s <= 0.0   ? Feature::vertex(mf.tail_vertex(h))
+                 : s >= 1.0 ? Feature::vertex(mf.head_vertex(h))
+                            : Feature::edge(h);
         }
       }
     }
-    if (best >= 0) {
-      f[iF] = Feature::edge(best);
+    if (best.valid()) {
+      f[iF] = best;
       return Step::kContinue;
     }
     const double d = mf.face_eval(face, p);
@@ -243,7 +255,7 @@ struct Solver {
       return Step::kContinue;
     }
     f[iF] = Feature::face(best_face);
-    if (best_eval == 0.0) return Step::kDone;
+    if (best_eval == 0.0) return Step::kZero;
     const Vec3 n = dir_to_a(iF, mf.face_normal(best_face));
     n_penetration_A = iF == 1 ? n : Vec3(-n);
     return Step::kPenetrating;
@@ -271,8 +283,12 @@ struct Solver {
       return (tail + l * seg - mo.vertex(vertex.index)).dot(seg);
     };
     auto face_derivative = [&](double l, Feature face) {
-      const double d = mo.face_eval(face.index, tail + l * seg);
-      const double slope = mo.face_normal(face.index).dot(seg);
+      // The slope is computed exactly as the E-F state computes it (d(head) - d(tail)), so the
+      // two states agree on its sign even for an edge nearly parallel to the face: otherwise
+      // rounding can send E-E up to F and E-F back down to the edge forever.
+      const double d_tail = mo.face_eval(face.index, tail);
+      const double slope = mo.face_eval(face.index, head) - d_tail;
+      const double d = d_tail + l * slope;
       return d > 0.0 ? slope : (d < 0.0 ? -slope : 0.0);
     };
     if (c.simple) {
@@ -344,34 +360,43 @@ struct Solver {
     clip_edge(tail, head, mf.face_planes_begin(face), mf.face_planes_end(face), c);
     if (c.excluded) {
       // E misses F's region: the closest point of F to E is on F's boundary. Move to the
-      // boundary edge nearest to E (same distance: a downward move).
-      int best = -1;
+      // boundary feature nearest to E, an edge or, where the boundary comes closest at a corner,
+      // that vertex (same distance: a downward move).
+      Feature best;
       double best_d2 = kInfinity;
       for (const VoronoiPlane* q = mf.face_planes_begin(face); q != mf.face_planes_end(face); ++q) {
         const int g = q->neighbor.index;
         Vec3 c1, c2;
+        double s_e, s_g;
         const double d2 =
-            closest_points_segment_segment(tail, head, mf.tail(g), mf.head(g), c1, c2);
+            closest_params_segment_segment(tail, head, mf.tail(g), mf.head(g), s_e, s_g, c1, c2);
         if (d2 < best_d2) {
           best_d2 = d2;
-          best = g;
+          best = s_g <= 0.0   ? Feature::vertex(mf.tail_vertex(g))
+                 : s_g >= 1.0 ? Feature::vertex(mf.head_vertex(g))
+                              : Feature::edge(g);
         }
       }
-      f[iF] = Feature::edge(best);
+      f[iF] = best;
       return Step::kContinue;
     }
     const double d_tail = mf.face_eval(face, tail);
     const double d_head = mf.face_eval(face, head);
     const double d_lo = c.n_lo.valid() ? d_tail + c.lo * (d_head - d_tail) : d_tail;
     const double d_hi = c.n_hi.valid() ? d_tail + c.hi * (d_head - d_tail) : d_head;
-    // The edge pierces F inside F's region, or touches it and continues below: overlap.
-    if ((d_lo < 0.0 && d_hi > 0.0) || (d_lo > 0.0 && d_hi < 0.0) || (d_lo == 0.0 && d_hi < 0.0) ||
-        (d_lo < 0.0 && d_hi == 0.0)) {
+    // The edge pierces F inside F's region: overlap. (Through F's boundary exactly, it may only
+    // touch: decided at the end like every zero distance.)
+    if ((d_lo < 0.0 && d_hi > 0.0) || (d_lo > 0.0 && d_hi < 0.0)) {
+      const Vec3 pierce = tail + (d_tail / (d_tail - d_head)) * (head - tail);
+      for (const VoronoiPlane* q = mf.face_planes_begin(face); q != mf.face_planes_end(face); ++q) {
+        if (q->eval(pierce) <= 0.0) return Step::kZero;
+      }
       const Vec3 n = dir_to_a(iF, mf.face_normal(face));
       n_penetration_A = iF == 1 ? n : Vec3(-n);
       return Step::kPenetrating;
     }
-    if (d_lo == 0.0 || d_hi == 0.0) return Step::kDone;  // touching at a point or along E
+    // E meets F's plane inside F: touching or overlap, decided at the end.
+    if (d_lo == 0.0 || d_hi == 0.0) return Step::kZero;
     // Derivative rule: |d| not decreasing from the low end means the closest point is at or
     // before it: the tail vertex, or F's boundary edge across which E left the region.
     if ((d_lo > 0.0 && d_tail <= d_head) || (d_lo < 0.0 && d_tail >= d_head)) {
@@ -388,6 +413,72 @@ struct Solver {
       }
     }
     return Step::kContinue;
+  }
+
+  // Calls on_face(normal) and on_edge(direction), in A's frame, for every face and edge of body
+  // i through the point x_A (within tol).
+  template <typename FaceFn, typename EdgeFn>
+  void features_through(int i, const Vec3& x_A, double tol, FaceFn&& on_face,
+                        EdgeFn&& on_edge) const {
+    const FeatureMesh& m = *mesh[i];
+    const Vec3 x = i == 0 ? x_A : Vec3(Rt * x_A + tt);
+    for (int g = 0; g < m.num_faces(); ++g) {
+      if (std::abs(m.face_eval(g, x)) <= tol) on_face(dir_to_a(i, m.face_normal(g)));
+    }
+    for (int h = 0; h < m.num_half_edges(); ++h) {
+      if (h > m.twin(h)) continue;
+      if ((closest_point_segment(m.tail(h), m.head(h), x) - x).norm() <= tol) {
+        on_edge(dir_to_a(i, Vec3(m.head(h) - m.tail(h))));
+      }
+    }
+  }
+
+  // For features that meet (distance 0) at p_A: is there a plane separating the two interiors?
+  // The candidates are the separating-axis theorem's, restricted to the faces and edges through
+  // the contact point: face normals of either body and cross products of an edge of each.
+  // Returns the separating normal oriented from B to A, or zero if the interiors overlap.
+  Vec3 local_separating_axis(const Vec3& p_A) const {
+    constexpr int kMaxAxes = 128;
+    constexpr int kMaxEdges = 16;
+    Vec3 axes[kMaxAxes];
+    int count = 0;
+    Vec3 edges_a[kMaxEdges];
+    int num_edges_a = 0;
+    const double tol = 1e-12 * (mesh[0]->max_radius() + mesh[1]->max_radius() + t.norm());
+    auto add_axis = [&](const Vec3& n) {
+      if (count < kMaxAxes) axes[count++] = n;
+    };
+    features_through(0, p_A, tol, add_axis, [&](const Vec3& e) {
+      if (num_edges_a < kMaxEdges) edges_a[num_edges_a++] = e;
+    });
+    features_through(1, p_A, tol, add_axis, [&](const Vec3& e) {
+      for (int k = 0; k < num_edges_a; ++k) {
+        const Vec3 c = edges_a[k].cross(e);
+        const double norm = c.norm();
+        if (norm > 1e-12 * edges_a[k].norm() * e.norm()) add_axis(c / norm);
+      }
+    });
+    const FeatureMesh& a = *mesh[0];
+    const FeatureMesh& b = *mesh[1];
+    for (int k = 0; k < count; ++k) {
+      const Vec3& L = axes[k];
+      const Vec3 L_b = Rt * L;
+      const double shift = L.dot(t);
+      double max_a = -kInfinity, min_a = kInfinity, max_b = -kInfinity, min_b = kInfinity;
+      for (int v = 0; v < a.num_vertices(); ++v) {
+        const double x = L.dot(a.vertex(v));
+        max_a = std::max(max_a, x);
+        min_a = std::min(min_a, x);
+      }
+      for (int v = 0; v < b.num_vertices(); ++v) {
+        const double x = L_b.dot(b.vertex(v)) + shift;
+        max_b = std::max(max_b, x);
+        min_b = std::min(min_b, x);
+      }
+      if (max_a <= min_b) return -L;  // A below B along L: n from B to A is -L
+      if (max_b <= min_a) return L;
+    }
+    return Vec3::Zero();
   }
 
   // Closest points (in A) of the final feature pair.
@@ -413,15 +504,19 @@ struct Solver {
         pts[io] = to_a(iF, p);
         pts[iF] = to_a(iF, Vec3(p - mf.face_eval(face, p) * mf.face_normal(face)));
       } else {
-        // Edge on face (touching): the clipped end nearest to the plane.
+        // Edge meeting a face: the crossing of the plane, else the clipped end nearest to it.
         const Vec3 tail = to(iF, mesh[io]->tail(f[io].index));
         const Vec3 head = to(iF, mesh[io]->head(f[io].index));
         Clip c;
         clip_edge(tail, head, mf.face_planes_begin(face), mf.face_planes_end(face), c);
         const Vec3 e_lo = tail + c.lo * (head - tail);
         const Vec3 e_hi = tail + c.hi * (head - tail);
-        const Vec3 p =
-            std::abs(mf.face_eval(face, e_lo)) <= std::abs(mf.face_eval(face, e_hi)) ? e_lo : e_hi;
+        const double d_lo = mf.face_eval(face, e_lo);
+        const double d_hi = mf.face_eval(face, e_hi);
+        Vec3 p = std::abs(d_lo) <= std::abs(d_hi) ? e_lo : e_hi;
+        if ((d_lo < 0.0 && d_hi > 0.0) || (d_lo > 0.0 && d_hi < 0.0)) {
+          p = e_lo + (d_lo / (d_lo - d_hi)) * (e_hi - e_lo);  // where E crosses F's plane
+        }
         pts[io] = to_a(iF, p);
         pts[iF] = to_a(iF, Vec3(p - mf.face_eval(face, p) * mf.face_normal(face)));
       }
@@ -436,7 +531,7 @@ struct Solver {
     p_b = pts[1];
   }
 
-  // A normal for a touching pair (zero distance), oriented from B to A.
+  // A normal for features that meet (zero distance), oriented from B to A.
   Vec3 touching_normal() const {
     Vec3 n = Vec3::Zero();
     if (f[0].kind == FeatureKind::kFace) {
@@ -520,19 +615,26 @@ VClipResult vclip(const FeatureMesh& a, const FeatureMesh& b, const Mat3& R_AB, 
     result.distance = 0.0;
     return result;
   }
+  const Vec3 diff = result.p_a_A - result.p_b_A;
+  result.distance = diff.norm();
+  if (step == Step::kDone && result.distance > 0.0) {
+    result.status = ContactStatus::kSeparated;
+    result.n_A = diff / result.distance;
+    return result;
+  }
+  result.distance = 0.0;
   if (step == Step::kPenetrating) {
     result.status = ContactStatus::kPenetrating;
-    result.distance = 0.0;
     result.n_A = s.n_penetration_A;
     return result;
   }
-  const Vec3 diff = result.p_a_A - result.p_b_A;
-  result.distance = diff.norm();
-  if (result.distance > 0.0) {
-    result.status = ContactStatus::kSeparated;
-    result.n_A = diff / result.distance;
-  } else {
+  // The features meet: touching if a plane separates the interiors, else overlap.
+  const Vec3 axis = s.local_separating_axis(result.p_a_A);
+  if (axis.squaredNorm() > 0.0) {
     result.status = ContactStatus::kTouching;
+    result.n_A = axis;
+  } else {
+    result.status = ContactStatus::kPenetrating;
     result.n_A = s.touching_normal();
   }
   return result;

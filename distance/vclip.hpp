@@ -55,6 +55,9 @@ VClipResult vclip(const FeatureMesh& a, const FeatureMesh& b, const Mat3& R_AB, 
 // 5.1.9). Returns the squared distance.
 double closest_points_segment_segment(const Vec3& p1, const Vec3& q1, const Vec3& p2,
                                       const Vec3& q2, Vec3& c1, Vec3& c2);
+// The same with the segment parameters of the closest points (c1 = p1 + s (q1 - p1), ...).
+double closest_params_segment_segment(const Vec3& p1, const Vec3& q1, const Vec3& p2,
+                                      const Vec3& q2, double& s, double& t, Vec3& c1, Vec3& c2);
 // Closest point of segment [p, q] to x.
 Vec3 closest_point_segment(const Vec3& p, const Vec3& q, const Vec3& x);
 

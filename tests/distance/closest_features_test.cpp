@@ -54,6 +54,8 @@ void run_random_pairs(const TestShape& s1, const TestShape& s2, int count, std::
     INFO("pair " << s1.name << "-" << s2.name << " seed " << seed << " case " << i);
     if (r.status == ContactStatus::kFailed) {
       ++stats.failed;
+      std::printf("failed (step limit): %s-%s seed %llu case %d\n", s1.name.c_str(),
+                  s2.name.c_str(), static_cast<unsigned long long>(seed), i);
       continue;
     }
     if (r.status == ContactStatus::kPenetrating) {
