@@ -428,18 +428,30 @@ bool is_bounded(const Shape& shape) {
       shape);
 }
 
+namespace {
+
+// Tight: the farthest posed vertex or sphere surface point of any part.
+double compound_max_radius(const Compound& c) {
+  double r = 0.0;
+  for (const CompoundPart& part : c.parts) {
+    if (const auto* poly = std::get_if<ConvexPolyhedron>(part.shape.get())) {
+      for (const Vec3& v : poly->vertices()) {
+        r = std::max(r, (part.position_M + part.orientation_M * v).norm());
+      }
+    } else {
+      r = std::max(r, part.position_M.norm() + max_radius(*part.shape));
+    }
+  }
+  return r;
+}
+
+}  // namespace
+
 double max_radius(const Shape& shape) {
   return std::visit(Overloaded{[](const Sphere& s) { return s.radius; },
                                [](const ConvexPolyhedron& p) { return p.max_radius(); },
                                [](const Halfspace&) { return kInfinity; },
-                               [](const Compound& c) {
-                                 double r = 0.0;
-                                 for (const CompoundPart& part : c.parts) {
-                                   r = std::max(r,
-                                                part.position_M.norm() + max_radius(*part.shape));
-                                 }
-                                 return r;
-                               }},
+                               [](const Compound& c) { return compound_max_radius(c); }},
                     shape);
 }
 

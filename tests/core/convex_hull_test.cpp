@@ -154,3 +154,34 @@ TEST_CASE("Hull of points on a sphere is a valid triangulated-or-merged mesh") {
   CHECK(p.vertices().size() == 2000);
   CHECK(p.max_radius() <= 1.0 + 1e-3);
 }
+
+TEST_CASE("Noise below the coplanarity tolerance is merged away; above it, faces stay apart") {
+  const std::uint64_t seed = 99;
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const std::vector<Vec3> corners = box_corners(Vec3(1, 1, 1), Vec3::Zero(), Quat::Identity());
+  // Default tolerance: 1e-9 times the diagonal 2 sqrt(3).
+  for (double noise : {1e-12, 1e-10}) {
+    CAPTURE(seed, noise);
+    std::vector<Vec3> points = corners;
+    for (int i = 0; i < 60; ++i) {
+      Vec3 p(0.9 * u(rng), 0.9 * u(rng), 0.9 * u(rng));
+      p[i % 3] = (i % 2 ? 1.0 : -1.0) * (1.0 + noise * std::abs(u(rng)));  // slightly outside
+      points.push_back(p);
+    }
+    const auto p = ConvexPolyhedron::from_points(points);
+    require_counts(p, 8, 12, 6);
+    CHECK(polyhedron_defect(p, 1e-9 * 2 * std::sqrt(3.0)) == "");
+  }
+  // A face point raised by 1e-3 (far above the tolerance) is a real apex: 4 triangles replace
+  // the top face.
+  std::vector<Vec3> points = corners;
+  points.emplace_back(0.0, 0.0, 1.001);
+  const auto p = ConvexPolyhedron::from_points(points);
+  require_counts(p, 9, 16, 9);
+  CHECK(polyhedron_defect(p, 1e-12) == "");
+  // With an explicit tolerance above the rise, the apex is merged into the top face.
+  const auto flat = ConvexPolyhedron::from_points(points, 2e-3);
+  require_counts(flat, 8, 12, 6);
+  CHECK(polyhedron_defect(flat, 2e-3) == "");
+}

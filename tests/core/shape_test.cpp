@@ -174,7 +174,8 @@ TEST_CASE("Compounds: validated parts, union bounding box, radius") {
       make_compound({{ball, Vec3(3, 0, 0), Quat::Identity()}, {cube, Vec3(-2, 0, 0), quarter}});
   const Shape shape = c;
   CHECK(is_bounded(shape));
-  CHECK(max_radius(shape) == Approx(2.0 + std::sqrt(3.0)));
+  // Tight: the cube's farthest corner, turned 45 degrees about z, is at (-2 - sqrt 2, 0, +-1).
+  CHECK(max_radius(shape) == Approx(std::hypot(2.0 + std::sqrt(2.0), 1.0)).epsilon(1e-15));
   const Aabb box = bounding_box_W(shape, Vec3(0, 0, 1), Quat::Identity());
   CHECK(box.max_W.x() == Approx(3.5));
   CHECK(box.min_W.x() == Approx(-2.0 - std::sqrt(2.0)));
