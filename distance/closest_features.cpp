@@ -19,6 +19,12 @@ ShapeGeometry::ShapeGeometry(std::shared_ptr<const Shape> shape) : shape_(std::m
   } else {
     add_piece(*shape_, Vec3::Zero(), Mat3::Identity());
   }
+  for (const Piece& piece : pieces_) {
+    const double reach = piece.p_M.norm() + piece.max_radius;
+    reach_ = std::max(reach_, reach);
+    const bool centred_sphere = piece.kind == PieceKind::kSphere && piece.p_M.norm() == 0.0;
+    if (!centred_sphere) rotation_radius_ = std::max(rotation_radius_, reach);
+  }
 }
 
 void ShapeGeometry::add_piece(const Shape& shape, const Vec3& p_M, const Mat3& R_M) {

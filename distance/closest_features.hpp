@@ -54,6 +54,12 @@ class ShapeGeometry {
 
   const Shape& shape() const { return *shape_; }
   const std::vector<Piece>& pieces() const { return pieces_; }
+  // The largest distance from the origin of M that rotation about it can move a surface point
+  // through [m]: 0 for a sphere centred at the origin (its surface maps onto itself), the maximum
+  // radius otherwise; +inf with a halfspace piece.
+  double rotation_radius() const { return rotation_radius_; }
+  // The largest distance from the origin of M to any point of the shape [m] (+inf: halfspace).
+  double reach() const { return reach_; }
 
  private:
   void add_piece(const Shape& shape, const Vec3& p_M, const Mat3& R_M);
@@ -61,6 +67,8 @@ class ShapeGeometry {
   std::shared_ptr<const Shape> shape_;
   std::vector<std::unique_ptr<FeatureMesh>> meshes_;
   std::vector<Piece> pieces_;
+  double rotation_radius_ = 0.0;
+  double reach_ = 0.0;
 };
 
 // The per-pair cache (owned by the caller, one per body pair): the feature pair of each piece

@@ -23,6 +23,7 @@
 //   kinematic body spinning at Ω about an axis: |Ω x d̂| r_axis, r_axis the largest distance from
 //   the axis of the relevant surface points — exactly 0 when Ω is parallel to d̂ (a platter or
 //   halfspace spinning about its own normal), tested before multiplying, so never 0 x inf.
+#include "core/body.hpp"
 #include "core/settings.hpp"
 #include "core/types.hpp"
 #include "distance/closest_features.hpp"
@@ -77,5 +78,26 @@ ToiBound exact_toi_sphere_sphere(const Vec3& c1_W, const Vec3& v1_W, double r1, 
 ToiBound exact_toi_sphere_plane(const Vec3& c_W, const Vec3& v_W, const Vec3& g_W, double radius,
                                 const Vec3& n_W, double offset_W, const Vec3& plane_velocity_W,
                                 double d_target);
+
+// The ToiMotion of a body in `state` (DESIGN.md §3): dynamic bodies move at v under gravity with
+// the rotational term ω̄ ρ (ω̄ = angular_speed_bound, ρ = ShapeGeometry::rotation_radius(), 0 for
+// a sphere about its centre); fixed bodies do not move; kinematic bodies translate at their axis
+// velocity and spin at Ω, with r_axis the distance from the axis to the body's centre plus ρ —
+// or, for a halfspace, the distance from the axis to the other body's centre plus that body's
+// reach `other_reach_m` (the part of the plane the other body can touch; valid while the other
+// body stays within that reach of where it is now).
+ToiMotion toi_motion(const Body& body, const BodyState& state, const ShapeGeometry& geometry,
+                     const Vec3& gravity_W, const Vec3& other_center_W, double other_reach_m,
+                     const Settings& settings);
+
+// The time-of-impact bound of a pair of bodies in the given states (at the same time), from their
+// closest-feature result, aimed at d_target = envelope / 2. Exact where a closed form exists (two
+// dynamic spheres; a dynamic sphere against a fixed halfspace or a kinematic halfspace whose
+// rotation is about its own normal), conservative otherwise (floored and counted by
+// settings.toi_min_progress_s).
+ToiBound time_of_impact(const Body& body1, const BodyState& state1, const ShapeGeometry& geometry1,
+                        const Body& body2, const BodyState& state2, const ShapeGeometry& geometry2,
+                        const DistanceResult& closest, const Vec3& gravity_W,
+                        const Settings& settings);
 
 }  // namespace palpable
