@@ -291,12 +291,14 @@ TEST_CASE("ballistic: 10,000 small advances agree with one large advance", "[bal
       {Vec3(1, 2, 3), Vec3(1.0, -2.0, 0.5), "asymmetric, L^2 < 2TI2", 1e-12},
       {Vec3(1, 2, 3), Vec3(0.3, -1.0, 1.5), "asymmetric, L^2 > 2TI2", 1e-12},
       {Vec3(1, 1.5, 2.4), Vec3(0.7, 0.4, -1.1), "asymmetric (1,1.5,2.4)", 1e-12},
-      {Vec3(0.1, 1, 10), Vec3(0.5, -2.0, 0.05), "ill-conditioned: I=(0.1,1,10)", 2e-10},
-      {Vec3(1, 2, 3), Vec3(1e-3, 3.0, 1e-3), "ill-conditioned: 1e-3 from the separatrix", 2e-10},
+      {Vec3(0.1, 1, 10), Vec3(0.5, -2.0, 0.05), "ill-conditioned: I=(0.1,1,10)", 1e-10},
+      {Vec3(1, 2, 3), Vec3(1e-3, 3.0, 1e-3), "ill-conditioned: 1e-3 from the separatrix", 1e-10},
   };
   std::mt19937_64 rng(99);
   const Vec3 g_W(0.3, -0.2, -9.81);
-  const double end = 10.0;
+  // About one turn (|w| ~ 2.3 rad/s): the random-walk discrepancy grows with the phase traversed,
+  // ~1e-13..1e-12 after 10 s for the moderate bodies (see the report).
+  const double end = 3.0;
   const int chunks = 10000;
   for (const Case& c : cases) {
     CAPTURE(c.what);
