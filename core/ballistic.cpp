@@ -222,6 +222,8 @@ FreeRotation asymmetric_rotation(const Vec3& I, const Quat& q_WB, const Vec3& w_
   SnCnDn f1;
   if (kp2 > 0) {
     const FirstAndThird i0 = incomplete_integrals(sn0, cn0, kp2, n);
+    // Not finite only at the equilibrium on e2 with k'^2 underflowing: a steady rotation.
+    if (!std::isfinite(i0.Pi)) return steady_rotation(q_WB, w_W, dt);
     u0 = i0.F;
     J0 = i0.Pi;
     u1 = u0 + u_rate * dt;
@@ -386,7 +388,7 @@ Vec3 angular_momentum_W(const MassProperties& mass, const BodyState& state) {
 
 double polhode_period(const Vec3& I_B, const Vec3& w_B) {
   const double spin = w_B.norm();
-  if (spin == 0.0) return kInfinity;
+  if (spin == 0.0 || !(I_B.x() < I_B.y() && I_B.y() < I_B.z())) return kInfinity;
   const Vec3 e = w_B / spin;
   const double I1 = I_B.x(), I2 = I_B.y(), I3 = I_B.z();
   const double e1s = e.x() * e.x(), e2s = e.y() * e.y(), e3s = e.z() * e.z();
