@@ -122,7 +122,7 @@ FirstAndThird incomplete_integrals(Real s, Real c, Real kp2, Real n) {
 // coordinates, l = (la, lb, lp)); G = Rz(-phi) Rx(-theta) with l = |l| (sin th sin ph, sin th cos
 // ph, cos th). Requires la^2 + lb^2 > 0.
 Mat3L pole_frame(const Vec3L& l_P) {
-  const Real sxy = std::hypot(l_P.x(), l_P.y());
+  const Real sxy = std::sqrt(l_P.x() * l_P.x() + l_P.y() * l_P.y());  // O(1) values
   const Real len = l_P.norm();
   const Real ct = l_P.z() / len, st = sxy / len;
   const Real sp = l_P.x() / sxy, cp = l_P.y() / sxy;
@@ -213,7 +213,7 @@ FreeRotation asymmetric_rotation(const Vec3& I, const Quat& q_WB, const Vec3& w_
   const Real s_2 = s_c * s_d;
   Real sn0 = s_2 * e.y() / A2;
   Real cn0 = s_c * e[c_axis] / Ac;
-  const Real h = std::hypot(sn0, cn0);
+  const Real h = std::sqrt(sn0 * sn0 + cn0 * cn0);  // O(1) values
   sn0 /= h;
   cn0 /= h;
 
@@ -231,7 +231,7 @@ FreeRotation asymmetric_rotation(const Vec3& I, const Quat& q_WB, const Vec3& w_
     // the third-kind integral gains the complete Pi(n, k) per half period.
     const Jacobi jacobi(k2, kp2);
     const Real K = jacobi.complete_K();
-    const Real m = std::nearbyint(u1 / (2 * K));
+    const Real m = std::nearbyint(static_cast<double>(u1 / (2 * K)));
     const Real r = u1 - 2 * K * m;
     f1 = jacobi(r);
     const FirstAndThird i1 = incomplete_integrals(f1.sn, std::fabs(f1.cn), kp2, n);
