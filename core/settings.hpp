@@ -70,6 +70,11 @@ struct Settings {
   // with an orientation error ~ delta * |omega| * t; larger is never needed for accuracy.
   double inertia_symmetry_tolerance = 1e-12;
 
+  // Broad-phase horizon [s]: each moving body's swept box covers this much of its future
+  // ballistic flight, and is refreshed (an event of its own) when it runs out or the body
+  // collides. Longer horizons mean fewer refreshes but bigger boxes, so more pairs bounded.
+  double broad_phase_horizon_s = 0.25;
+
   // Events processed at one instant for one pair before the scheduler reports a rounding loop
   // and moves on (counted in the statistics, never silent).
   int retry_limit = 100;

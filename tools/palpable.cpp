@@ -30,7 +30,8 @@ int main(int argc, char** argv) {
   using namespace palpable::tools;
   CLI::App app{
       "Palpable: impulse-based, event-driven rigid-body simulation with exact ballistic flight,\n"
-      "closest-feature collision detection and Coulomb friction integrated over the normal impulse\n"
+      "closest-feature collision detection and Coulomb friction integrated over the normal "
+      "impulse\n"
       "(after Mirtich & Canny, 1995).\n\n"
       "Exit codes: 0 success; 1 the run failed; 2 bad input (command line, scene, spec), nothing\n"
       "run; 3 the run finished but a requested check did not hold.\n",

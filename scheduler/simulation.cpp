@@ -1,0 +1,680 @@
+#include "scheduler/simulation.hpp"
+
+#include "core/ballistic.hpp"
+#include "core/check.hpp"
+#include "distance/closest_features.hpp"
+#include "distance/toi_bound.hpp"
+#include "impulse/collision_integrator.hpp"
+#include "impulse/collision_matrix.hpp"
+#include "impulse/microcollision.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <unordered_map>
+
+namespace palpable {
+
+namespace {
+
+std::uint64_t pair_key(BodyId a, BodyId b) {
+  return (static_cast<std::uint64_t>(a.index) << 32) | b.index;
+}
+
+// The box swept by a point moving as x0 + v s + g s^2 / 2 for s in [0, dt], per axis.
+Aabb parabola_box(const Vec3& x0, const Vec3& v, const Vec3& g, double dt) {
+  Aabb box;
+  box.min_W = x0;
+  box.max_W = x0;
+  auto include = [&](double s) {
+    Vec3 x = x0 + v * s + 0.5 * g * s * s;
+    box.min_W = box.min_W.cwiseMin(x);
+    box.max_W = box.max_W.cwiseMax(x);
+  };
+  include(dt);
+  for (int i = 0; i < 3; ++i) {
+    if (g[i] != 0.0) {
+      double s = -v[i] / g[i];
+      if (s > 0.0 && s < dt) include(s);
+    }
+  }
+  return box;
+}
+
+Aabb grown(Aabb box, double margin) {
+  box.min_W.array() -= margin;
+  box.max_W.array() += margin;
+  return box;
+}
+
+// Is the point q (on the plane of the convex polygon `patch`, counter-clockwise about n) inside?
+bool inside_convex_polygon(const std::vector<Vec3>& patch, const Vec3& n, const Vec3& q) {
+  for (std::size_t i = 0; i < patch.size(); ++i) {
+    const Vec3& p0 = patch[i];
+    const Vec3& p1 = patch[(i + 1) % patch.size()];
+    if ((p1 - p0).cross(q - p0).dot(n) < 0.0) return false;
+  }
+  return true;
+}
+
+// Where the segment from `inside` to `outside` leaves the convex polygon (both on its plane).
+Vec3 exit_point(const std::vector<Vec3>& patch, const Vec3& n, const Vec3& inside,
+                const Vec3& outside) {
+  double s_exit = 1.0;
+  const Vec3 d = outside - inside;
+  for (std::size_t i = 0; i < patch.size(); ++i) {
+    const Vec3& p0 = patch[i];
+    const Vec3& p1 = patch[(i + 1) % patch.size()];
+    // Inward edge normal m: points with m . (x - p0) >= 0 are inside.
+    const Vec3 m = n.cross(p1 - p0);
+    const double f0 = m.dot(inside - p0);
+    const double fd = m.dot(d);
+    if (fd < 0.0) s_exit = std::min(s_exit, std::max(0.0, f0 / -fd));
+  }
+  return inside + s_exit * d;
+}
+
+}  // namespace
+
+struct Simulation::Impl {
+  struct BodyRuntime {
+    std::shared_ptr<const ShapeGeometry> geometry;
+    Aabb box;                    // swept box over [box_t, horizon]
+    double horizon = kInfinity;  // absolute time the box stops being valid
+    EventQueue::EventId horizon_event = EventQueue::kNoEvent;
+    std::vector<std::uint32_t> pairs;
+  };
+  struct PairRuntime {
+    BodyId a, b;
+    PairCache cache;
+    EventQueue::EventId event = EventQueue::kNoEvent;
+    bool live = false;
+    double last_collision_t = -kInfinity;
+    int collisions_at_t = 0;
+  };
+  // Everything the collision of a pair needs, in the world frame; body 1 = a, body 2 = b.
+  struct Contact {
+    Vec3 point_W = Vec3::Zero();
+    Vec3 n_W = Vec3::UnitZ();
+    ContactBody body1, body2;
+    double u_n = 0.0;             // relative normal velocity (< 0 approaching)
+    double g_n = 0.0;             // relative normal acceleration toward contact (>= 0)
+    double v_micro = 0.0;         // microcollision speed of this contact
+    Vec3 a_rel_W = Vec3::Zero();  // slip acceleration at the moving contact location
+    bool centre_of_pressure = false;
+    std::vector<Vec3> patch;
+  };
+
+  Simulation& sim;
+  EventQueue queue;
+  std::vector<BodyRuntime> bodies;
+  std::vector<PairRuntime> pairs;
+  std::vector<std::uint32_t> free_pairs;
+  std::unordered_map<std::uint64_t, std::uint32_t> pair_index;
+  EventQueue::EventId sample_event = EventQueue::kNoEvent;
+  std::uint64_t next_sample = 0;
+
+  Impl(Simulation& s, QueueImpl impl) : sim(s), queue(impl) {}
+
+  const Settings& settings() const { return sim.world_.settings; }
+  Body& body(BodyId id) { return sim.world_.bodies[id.index]; }
+  const Body& body(BodyId id) const { return sim.world_.bodies[id.index]; }
+  Vec3 gravity_on(const Body& b) const {
+    return b.is_dynamic() ? sim.world_.gravity_W : Vec3::Zero();
+  }
+
+  BodyState extrapolate(BodyId id, double t) const {
+    const Body& b = body(id);
+    if (t <= b.state.t) return b.state;
+    return advance(b, b.state, t, sim.world_.gravity_W, settings());
+  }
+  void commit(BodyId id, double t) {
+    Body& b = body(id);
+    if (t > b.state.t) b.state = advance(b, b.state, t, sim.world_.gravity_W, settings());
+  }
+
+  // ---------------------------------------------------------------- broad phase
+
+  void refresh_box(BodyId id, double t) {
+    BodyRuntime& rt = bodies[id.index];
+    const Body& b = body(id);
+    const BodyState s = extrapolate(id, t);
+    const double margin = settings().envelope_m;
+    const double reach = rt.geometry->reach();
+    if (b.motion == MotionKind::kFixed) {
+      rt.box = grown(bounding_box_W(*b.shape, s.x_W, s.q_WM), margin);
+      rt.horizon = kInfinity;
+      return;
+    }
+    if (b.motion == MotionKind::kKinematic) {
+      const KinematicMotion& k = b.kinematic;
+      const bool translating = k.velocity_W.squaredNorm() > 0.0;
+      const bool spinning = k.angular_velocity_W.squaredNorm() > 0.0;
+      if (!std::isfinite(reach)) {
+        // A halfspace: a static set unless it translates or spins about a non-normal axis.
+        const Halfspace& h = std::get<Halfspace>(*b.shape);
+        const Vec3 n_W = s.q_WM * h.normal_M;
+        const bool maps_onto_itself =
+            !translating && (!spinning || n_W.cross(k.angular_velocity_W).norm() <=
+                                              1e-12 * k.angular_velocity_W.norm());
+        rt.box = maps_onto_itself ? grown(bounding_box_W(*b.shape, s.x_W, s.q_WM), margin)
+                                  : Aabb{Vec3::Constant(-kInfinity), Vec3::Constant(kInfinity)};
+        rt.horizon = kInfinity;
+        return;
+      }
+      // Every material point stays within |x - c| + reach of the axis point c(t).
+      const Vec3 c = k.point_W + k.velocity_W * t;
+      const double radius = (s.x_W - c).norm() + reach;
+      const double horizon = translating ? settings().broad_phase_horizon_s : kInfinity;
+      const double dt = translating ? horizon : 0.0;
+      rt.box = grown(parabola_box(c, k.velocity_W, Vec3::Zero(), dt), radius + margin);
+      rt.horizon = t + horizon;
+      return;
+    }
+    const Vec3 g = sim.world_.gravity_W;
+    if (s.v_W.squaredNorm() == 0.0 && g.squaredNorm() == 0.0) {
+      rt.box = grown(parabola_box(s.x_W, s.v_W, g, 0.0), reach + margin);
+      rt.horizon = kInfinity;
+      return;
+    }
+    const double dt = settings().broad_phase_horizon_s;
+    rt.box = grown(parabola_box(s.x_W, s.v_W, g, dt), reach + margin);
+    rt.horizon = t + dt;
+  }
+
+  void schedule_horizon(BodyId id) {
+    BodyRuntime& rt = bodies[id.index];
+    if (std::isfinite(rt.horizon)) {
+      Event e;
+      e.t = rt.horizon;
+      e.kind = EventKind::kHorizon;
+      e.a = id;
+      if (rt.horizon_event == EventQueue::kNoEvent) {
+        rt.horizon_event = queue.push(e);
+      } else {
+        queue.update(rt.horizon_event, e);
+      }
+    } else if (rt.horizon_event != EventQueue::kNoEvent) {
+      queue.erase(rt.horizon_event);
+      rt.horizon_event = EventQueue::kNoEvent;
+    }
+  }
+
+  std::uint32_t create_pair(BodyId a, BodyId b) {
+    std::uint32_t index;
+    if (!free_pairs.empty()) {
+      index = free_pairs.back();
+      free_pairs.pop_back();
+    } else {
+      index = static_cast<std::uint32_t>(pairs.size());
+      pairs.emplace_back();
+    }
+    PairRuntime& p = pairs[index];
+    p = PairRuntime{};
+    p.a = a;
+    p.b = b;
+    p.live = true;
+    pair_index.emplace(pair_key(a, b), index);
+    bodies[a.index].pairs.push_back(index);
+    bodies[b.index].pairs.push_back(index);
+    ++sim.stats_.pairs_created;
+    sim.stats_.max_pairs = std::max<std::uint64_t>(sim.stats_.max_pairs, pair_index.size());
+    return index;
+  }
+
+  void remove_pair(std::uint32_t index) {
+    PairRuntime& p = pairs[index];
+    if (p.event != EventQueue::kNoEvent) queue.erase(p.event);
+    for (BodyId id : {p.a, p.b}) {
+      auto& list = bodies[id.index].pairs;
+      list.erase(std::find(list.begin(), list.end(), index));
+    }
+    pair_index.erase(pair_key(p.a, p.b));
+    p.live = false;
+    free_pairs.push_back(index);
+  }
+
+  // Recomputes the swept box of `id` from time t and brings its pairs up to date: pairs whose
+  // boxes overlap exist (never two non-dynamic bodies), others are dropped; every pair of `id`
+  // is then re-bounded. Brute force over the bodies: O(n) per refresh.
+  void refresh_body(BodyId id, double t) {
+    refresh_box(id, t);
+    schedule_horizon(id);
+    const Body& self = body(id);
+    const Aabb& box = bodies[id.index].box;
+    for (std::uint32_t j = 0; j < bodies.size(); ++j) {
+      if (j == id.index) continue;
+      const Body& other = sim.world_.bodies[j];
+      if (!self.is_dynamic() && !other.is_dynamic()) continue;
+      BodyId a{std::min(id.index, j)}, b{std::max(id.index, j)};
+      auto it = pair_index.find(pair_key(a, b));
+      const bool overlap = box.overlaps(bodies[j].box);
+      if (overlap && it == pair_index.end()) {
+        create_pair(a, b);
+      } else if (!overlap && it != pair_index.end()) {
+        remove_pair(it->second);
+      }
+    }
+    // Copy: rebound never changes the pair list.
+    std::vector<std::uint32_t> list = bodies[id.index].pairs;
+    for (std::uint32_t index : list) rebound(index, t);
+  }
+
+  // ---------------------------------------------------------------- contacts
+
+  // The contact of pair `p` whose closest features are `dr` (states at the same time).
+  Contact make_contact(const PairRuntime& p, const BodyState& s1, const BodyState& s2,
+                       const DistanceResult& dr, bool with_patch) const {
+    const Body& b1 = body(p.a);
+    const Body& b2 = body(p.b);
+    Contact c;
+    c.n_W = dr.n_W;
+    c.point_W = 0.5 * (dr.p1_W + dr.p2_W);
+
+    const Vec3 acc1 = gravity_on(b1), acc2 = gravity_on(b2);
+    c.g_n = -(acc1 - acc2).dot(c.n_W);
+    if (b1.is_dynamic() && b2.is_dynamic()) {
+      // Same gravity on both: use the upper body's weight along n (DESIGN.md §4).
+      c.g_n = std::abs(sim.world_.gravity_W.dot(c.n_W));
+    }
+    c.g_n = std::max(c.g_n, 0.0);
+    c.v_micro = microcollision_speed(settings(), c.g_n);
+
+    auto fill = [&](ContactBody& cb, const Body& b, const BodyState& s) {
+      cb.inv_mass = b.mass.inv_mass;
+      cb.inv_inertia_W = b.is_dynamic() ? inverse_inertia_W(b, s.q_WM) : Mat3::Zero();
+      cb.v_W = s.v_W;
+      cb.w_W = s.w_W;
+    };
+    fill(c.body1, b1, s1);
+    fill(c.body2, b2, s2);
+
+    if (with_patch && dr.status != ContactStatus::kPenetrating) {
+      c.patch = contact_patch(*bodies[p.a.index].geometry, Pose{s1.x_W, s1.q_WM},
+                              *bodies[p.b.index].geometry, Pose{s2.x_W, s2.q_WM}, dr,
+                              settings().envelope_m);
+    }
+    const bool one_dynamic = b1.is_dynamic() != b2.is_dynamic();
+    if (c.patch.size() >= 2) {
+      const bool d_is_1 = b1.is_dynamic();
+      const BodyState& sd = d_is_1 ? s1 : s2;
+      const BodyState& ss = d_is_1 ? s2 : s1;
+      // Foot of the dynamic body's centre of mass on the contact plane.
+      const Vec3 foot = sd.x_W - c.n_W * c.n_W.dot(sd.x_W - dr.p2_W);
+      Vec3 centroid = Vec3::Zero();
+      for (const Vec3& q : c.patch) centroid += q;
+      centroid /= static_cast<double>(c.patch.size());
+      double patch_radius = 0.0;
+      for (const Vec3& q : c.patch) patch_radius = std::max(patch_radius, (q - centroid).norm());
+      Vec3 w_rel = sd.w_W - ss.w_W;
+      const Vec3 w_in = w_rel - c.n_W * c.n_W.dot(w_rel);
+      // The centre-of-pressure rule (DESIGN.md §4) for a dynamic body on a fixed or kinematic
+      // one, touching over a polygon and not rocking faster than the microcollision speed.
+      if (one_dynamic && c.patch.size() >= 3 &&
+          w_in.norm() * patch_radius <= std::max(c.v_micro, 1e-9)) {
+        c.centre_of_pressure = true;
+        c.point_W = foot;
+      } else {
+        // Otherwise the patch point approaching fastest (the corner that lands first); among
+        // equals, the one nearest the foot of the centre of mass.
+        double best = kInfinity;
+        for (const Vec3& q : c.patch) {
+          const double u_n = (point_velocity_W(s1, q) - point_velocity_W(s2, q)).dot(c.n_W);
+          const double tie = 1e-12 * (1.0 + std::abs(u_n));
+          if (u_n < best - tie ||
+              (std::abs(u_n - best) <= tie && (q - foot).norm() < (c.point_W - foot).norm())) {
+            best = std::min(best, u_n);
+            c.point_W = q;
+          }
+        }
+      }
+    }
+    c.body1.r_W = c.point_W - s1.x_W;
+    c.body2.r_W = c.point_W - s2.x_W;
+    c.u_n = (contact_point_velocity_W(c.body1) - contact_point_velocity_W(c.body2)).dot(c.n_W);
+
+    // Rate of change of the slip at the moving contact location over the next flight
+    // (DESIGN.md §4): gravity, the rotational terms of a rotating contact point, and for a
+    // kinematic surface the change of its velocity under the moving location, Omega x (p' - V).
+    const Body* dynamic_body = b1.is_dynamic() ? &b1 : (b2.is_dynamic() ? &b2 : nullptr);
+    const ContactBody& cd = b1.is_dynamic() ? c.body1 : c.body2;
+    Vec3 location_velocity = Vec3::Zero();
+    const bool sphere_like = dynamic_body && std::holds_alternative<Sphere>(*dynamic_body->shape);
+    if (dynamic_body) {
+      location_velocity =
+          (sphere_like || c.centre_of_pressure) ? cd.v_W : contact_point_velocity_W(cd);
+    }
+    auto accel = [&](const Body& b, const ContactBody& cb) -> Vec3 {
+      if (b.is_dynamic()) {
+        Vec3 a = sim.world_.gravity_W;
+        if (!sphere_like && !c.centre_of_pressure) a += cb.w_W.cross(cb.w_W.cross(cb.r_W));
+        return a;
+      }
+      if (b.motion == MotionKind::kKinematic) {
+        return b.kinematic.angular_velocity_W.cross(location_velocity - b.kinematic.velocity_W);
+      }
+      return Vec3::Zero();
+    };
+    c.a_rel_W = accel(b1, c.body1) - accel(b2, c.body2);
+    return c;
+  }
+
+  bool approaching(const Contact& c) const {
+    // u_n = 0 with gravity pressing the bodies together counts as approaching: a body left at
+    // rest in contact by an e = 0 collision must collide again (DESIGN.md §4).
+    return c.u_n < 0.0 || (c.g_n > 0.0 && c.u_n <= 1e-9 * c.v_micro);
+  }
+
+  // Resolves the collision and applies it to both bodies; returns the record.
+  CollisionRecord resolve(const PairRuntime& p, Contact& c, double t) {
+    const Material& material = sim.world_.material(p.a, p.b);
+    CollisionParameters params = collision_parameters(material, settings());
+    params.min_rebound_speed = c.g_n > 0.0 ? c.v_micro : 0.0;
+    const Mat3 R_WC = contact_frame_W(c.n_W);
+
+    ContactBody cb1 = c.body1, cb2 = c.body2;
+    Body& b1 = body(p.a);
+    Body& b2 = body(p.b);
+    if (c.centre_of_pressure) {
+      // The impulse's line of action through the centre of mass: no in-plane rotation change.
+      (b1.is_dynamic() ? cb1 : cb2).inv_inertia_W.setZero();
+    }
+    const Mat3 K_c = R_WC.transpose() * collision_matrix_W(cb1, cb2) * R_WC;
+    const Vec3 u0_c =
+        R_WC.transpose() * (contact_point_velocity_W(cb1) - contact_point_velocity_W(cb2));
+    const bool micro = is_microcollision(u0_c.z(), c.v_micro, settings());
+    CollisionResult result;
+    if (micro) {
+      MicrocollisionContext context;
+      const Vec3 a_c = R_WC.transpose() * c.a_rel_W;
+      context.a_t_c = Vec2(a_c.x(), a_c.y());
+      context.g_n = c.g_n;
+      result = resolve_microcollision(K_c, u0_c, params, settings().microcollision_rule, context,
+                                      c.v_micro);
+    } else {
+      result = integrate_collision(K_c, u0_c, params);
+    }
+    sim.stats_.integration_steps += static_cast<std::uint64_t>(result.steps);
+    if (!succeeded(result.status)) {
+      // Numerical failure: fall back to the frictionless impulse (always defined for an SPD K),
+      // counted. The contact still separates.
+      ++sim.stats_.impulse_failures;
+      CollisionParameters frictionless = params;
+      frictionless.friction = 0.0;
+      result = integrate_collision(K_c, u0_c, frictionless);
+    }
+    Vec3 p_W = R_WC * result.p_c;
+
+    if (c.centre_of_pressure) {
+      // Where does the line of action through the centre of mass meet the contact plane?
+      const bool d_is_1 = b1.is_dynamic();
+      const Vec3 x_D = d_is_1 ? b1.state.x_W : b2.state.x_W;
+      const double pn = p_W.dot(c.n_W);
+      const Vec3 pressure = pn != 0.0 ? x_D + p_W * (c.n_W.dot(c.point_W - x_D) / pn) : c.point_W;
+      if (!inside_convex_polygon(c.patch, c.n_W, pressure)) {
+        // The patch cannot carry that torque: the body tips about the patch boundary.
+        c.centre_of_pressure = false;
+        c.point_W = exit_point(c.patch, c.n_W, c.point_W, pressure);
+        c.body1.r_W = c.point_W - b1.state.x_W;
+        c.body2.r_W = c.point_W - b2.state.x_W;
+        return resolve(p, c, t);
+      }
+    }
+
+    apply_impulse(p_W, cb1, cb2);
+    auto store = [&](Body& b, const ContactBody& cb, const Body& other) {
+      if (!b.is_dynamic()) return;
+      b.state.v_W = cb.v_W;
+      b.state.w_W = cb.w_W;
+      if (c.centre_of_pressure) {
+        // A face resting on a face does not rock: the pressure over the patch takes out the
+        // small in-plane relative rotation (a plastic slap; the spin about n stays free).
+        const Vec3 w_rel = b.state.w_W - other.state.w_W;
+        b.state.w_W -= w_rel - c.n_W * c.n_W.dot(w_rel);
+      }
+    };
+    store(b1, cb1, b2);
+    store(b2, cb2, b1);
+    PALPABLE_CHECK(b1.state.v_W.allFinite() && b1.state.w_W.allFinite() &&
+                       b2.state.v_W.allFinite() && b2.state.w_W.allFinite(),
+                   "non-finite velocity after a collision");
+
+    CollisionRecord record;
+    record.t = t;
+    record.kind = micro ? CollisionKind::kMicrocollision : CollisionKind::kCollision;
+    record.a = p.a;
+    record.b = p.b;
+    record.p_W = c.point_W;
+    record.n_W = c.n_W;
+    record.impulse_W = p_W;
+    record.approach_speed = -u0_c.z();
+    record.energy_change = result.energy_change;
+    record.centre_of_pressure = c.centre_of_pressure;
+    if (micro) {
+      ++sim.stats_.microcollisions;
+    } else {
+      ++sim.stats_.collisions;
+    }
+    if (c.centre_of_pressure) ++sim.stats_.centre_of_pressure;
+    return record;
+  }
+
+  // ---------------------------------------------------------------- pair events
+
+  void schedule_pair(std::uint32_t index, double t_next) {
+    PairRuntime& p = pairs[index];
+    const double horizon = std::min(bodies[p.a.index].horizon, bodies[p.b.index].horizon);
+    // A bound at or past a horizon needs no event: the horizon's refresh re-bounds the pair.
+    if (!(t_next < horizon) || !std::isfinite(t_next)) {
+      if (p.event != EventQueue::kNoEvent) {
+        queue.erase(p.event);
+        p.event = EventQueue::kNoEvent;
+        ++sim.stats_.rescheduled;
+      }
+      return;
+    }
+    Event e;
+    e.t = t_next;
+    e.kind = EventKind::kPairCheck;
+    e.a = p.a;
+    e.b = p.b;
+    if (p.event == EventQueue::kNoEvent) {
+      p.event = queue.push(e);
+    } else {
+      queue.update(p.event, e);
+      ++sim.stats_.rescheduled;
+    }
+  }
+
+  // The next event time of a pair from its closest features at time t.
+  double next_check_time(const PairRuntime& p, const BodyState& s1, const BodyState& s2,
+                         const DistanceResult& dr, double t) {
+    const double floor = std::max(settings().toi_min_progress_s, 1e-12 * std::max(1.0, t));
+    if (dr.status == ContactStatus::kFailed) {
+      ++sim.stats_.distance_failures;
+      return t + floor;
+    }
+    if (dr.status == ContactStatus::kPenetrating || dr.distance <= settings().envelope_m) {
+      Contact c = make_contact(p, s1, s2, dr, /*with_patch=*/false);
+      if (approaching(c)) return t;
+      if (dr.status == ContactStatus::kPenetrating) return t + floor;
+    }
+    const Body& b1 = body(p.a);
+    const Body& b2 = body(p.b);
+    ToiBound bound =
+        time_of_impact(b1, s1, *bodies[p.a.index].geometry, b2, s2, *bodies[p.b.index].geometry, dr,
+                       sim.world_.gravity_W, settings());
+    if (bound.floored) ++sim.stats_.floored_bounds;
+    if (bound.exact) ++sim.stats_.exact_bounds;
+    if (!(bound.dt >= 0.0)) return t + floor;  // NaN guard: never stall, never skip
+    return t + bound.dt;
+  }
+
+  DistanceResult query(PairRuntime& p, const BodyState& s1, const BodyState& s2) {
+    DistanceResult dr = closest_features(*bodies[p.a.index].geometry, Pose{s1.x_W, s1.q_WM},
+                                         *bodies[p.b.index].geometry, Pose{s2.x_W, s2.q_WM},
+                                         p.cache, settings().distance_max_steps);
+    sim.stats_.feature_steps += static_cast<std::uint64_t>(dr.steps);
+    if (dr.status == ContactStatus::kPenetrating) ++sim.stats_.penetrations;
+    return dr;
+  }
+
+  void rebound(std::uint32_t index, double t) {
+    PairRuntime& p = pairs[index];
+    const BodyState s1 = extrapolate(p.a, t);
+    const BodyState s2 = extrapolate(p.b, t);
+    ++sim.stats_.bound_queries;
+    DistanceResult dr = query(p, s1, s2);
+    schedule_pair(index, next_check_time(p, s1, s2, dr, t));
+  }
+
+  void check_pair(std::uint32_t index, double t, SimulationObserver* observer) {
+    PairRuntime& p = pairs[index];
+    p.event = EventQueue::kNoEvent;  // it was just popped
+    commit(p.a, t);
+    commit(p.b, t);
+    const BodyState& s1 = body(p.a).state;
+    const BodyState& s2 = body(p.b).state;
+    ++sim.stats_.pair_checks;
+    DistanceResult dr = query(p, s1, s2);
+    if (dr.status != ContactStatus::kFailed &&
+        (dr.status == ContactStatus::kPenetrating || dr.distance <= settings().envelope_m)) {
+      Contact c = make_contact(p, s1, s2, dr, /*with_patch=*/true);
+      if (approaching(c)) {
+        if (t == p.last_collision_t) {
+          ++p.collisions_at_t;
+          ++sim.stats_.retries;
+          if (p.collisions_at_t > settings().retry_limit) {
+            // A rounding loop: report it and move on by the progress floor.
+            ++sim.stats_.retry_limit_hits;
+            schedule_pair(index, t + std::max(settings().toi_min_progress_s, 1e-12));
+            return;
+          }
+        } else {
+          p.last_collision_t = t;
+          p.collisions_at_t = 0;
+        }
+        CollisionRecord record = resolve(p, c, t);
+        if (observer) observer->on_collision(record);
+        const BodyId a = p.a, b = p.b;  // `p` may move when pairs are created below
+        refresh_body(a, t);
+        refresh_body(b, t);
+        return;
+      }
+    }
+    schedule_pair(index, next_check_time(p, s1, s2, dr, t));
+  }
+
+  void schedule_sample() {
+    const double interval = sim.options_.output_interval;
+    if (!(interval > 0.0)) return;
+    Event e;
+    e.t = static_cast<double>(next_sample) * interval;
+    e.kind = EventKind::kSample;
+    sample_event = queue.push(e);
+  }
+};
+
+Simulation::Simulation(World world, SimulationOptions options)
+    : world_(std::move(world)), options_(options) {
+  impl_ = std::make_unique<Impl>(*this, options.queue);
+  Impl& im = *impl_;
+  // Shapes are shared between bodies: one Voronoi structure per distinct shape.
+  std::map<const Shape*, std::shared_ptr<const ShapeGeometry>> geometries;
+  im.bodies.resize(world_.bodies.size());
+  for (std::size_t i = 0; i < world_.bodies.size(); ++i) {
+    Body& b = world_.bodies[i];
+    const std::string where = "/bodies/" + std::to_string(i);
+    if (!b.shape) throw InputError(where + "/shape", "body has no shape");
+    if (!b.state.x_W.allFinite() || !b.state.v_W.allFinite() || !b.state.w_W.allFinite() ||
+        !b.state.q_WM.coeffs().allFinite()) {
+      throw InputError(where, "non-finite initial state");
+    }
+    b.state.t = 0.0;
+    if (b.motion == MotionKind::kKinematic) {
+      // The state of a kinematic body at t = 0 follows from its prescribed motion.
+      b.state.w_W = b.kinematic.angular_velocity_W;
+      b.state.v_W = b.kinematic.velocity_W +
+                    b.kinematic.angular_velocity_W.cross(b.state.x_W - b.kinematic.point_W);
+    }
+    auto& g = geometries[b.shape.get()];
+    if (!g) g = std::make_shared<const ShapeGeometry>(b.shape);
+    im.bodies[i].geometry = g;
+  }
+  for (std::uint32_t i = 0; i < world_.bodies.size(); ++i) im.refresh_box(BodyId{i}, 0.0);
+  // Bodies may start touching (the racked pool balls sit inside each other's envelopes) but
+  // never overlapping.
+  for (std::uint32_t i = 0; i < world_.bodies.size(); ++i) {
+    for (std::uint32_t j = i + 1; j < world_.bodies.size(); ++j) {
+      if (!world_.bodies[i].is_dynamic() && !world_.bodies[j].is_dynamic()) continue;
+      if (!im.bodies[i].box.overlaps(im.bodies[j].box)) continue;
+      PairCache cache;
+      const Body& a = world_.bodies[i];
+      const Body& b = world_.bodies[j];
+      DistanceResult dr = closest_features(*im.bodies[i].geometry, Pose{a.state.x_W, a.state.q_WM},
+                                           *im.bodies[j].geometry, Pose{b.state.x_W, b.state.q_WM},
+                                           cache, world_.settings.distance_max_steps);
+      if (dr.status == ContactStatus::kPenetrating) {
+        throw InputError("/bodies/" + std::to_string(j),
+                         "body \"" + b.name + "\" overlaps body \"" + a.name + "\" (/bodies/" +
+                             std::to_string(i) +
+                             ") at the start; bodies may touch but not interpenetrate");
+      }
+    }
+  }
+  for (std::uint32_t i = 0; i < world_.bodies.size(); ++i) im.refresh_body(BodyId{i}, 0.0);
+  im.schedule_sample();
+}
+
+Simulation::~Simulation() = default;
+
+BodyState Simulation::state_at(BodyId id, double t) const {
+  return impl_->extrapolate(id, t);
+}
+
+void Simulation::run_until(double t_end, SimulationObserver* observer,
+                           const std::function<void(double)>& progress) {
+  Impl& im = *impl_;
+  std::uint64_t since_progress = 0;
+  while (!im.queue.empty() && im.queue.top().t <= t_end) {
+    EventQueue::EventId id;
+    const Event e = im.queue.pop(&id);
+    PALPABLE_CHECK(e.t >= now_, "time ran backwards in the event queue");
+    now_ = e.t;
+    ++stats_.events;
+    switch (e.kind) {
+      case EventKind::kPairCheck: {
+        auto it = im.pair_index.find(pair_key(e.a, e.b));
+        PALPABLE_CHECK(it != im.pair_index.end(), "pair event without a pair");
+        im.check_pair(it->second, e.t, observer);
+        break;
+      }
+      case EventKind::kHorizon:
+        im.bodies[e.a.index].horizon_event = EventQueue::kNoEvent;
+        im.commit(e.a, e.t);
+        ++stats_.horizon_refreshes;
+        im.refresh_body(e.a, e.t);
+        break;
+      case EventKind::kSample: {
+        std::vector<BodyState> states(world_.bodies.size());
+        for (std::uint32_t i = 0; i < states.size(); ++i) {
+          states[i] = im.extrapolate(BodyId{i}, e.t);
+          states[i].t = e.t;
+        }
+        ++stats_.samples;
+        if (observer) observer->on_sample(e.t, states);
+        ++im.next_sample;
+        im.schedule_sample();
+        break;
+      }
+      case EventKind::kEnd: break;
+    }
+    if (progress && ++since_progress >= 4096) {
+      since_progress = 0;
+      progress(now_);
+    }
+  }
+  now_ = std::max(now_, t_end);
+}
+
+}  // namespace palpable

@@ -1,0 +1,58 @@
+// palpable run: simulate a scene file.
+#include "core/check.hpp"
+#include "tools/commands.hpp"
+#include "tools/lib/atomic_file.hpp"
+#include "tools/lib/exit_codes.hpp"
+#include "tools/lib/run_scene.hpp"
+
+#include <iostream>
+#include <memory>
+
+#include <unistd.h>
+
+namespace {
+
+palpable::tools::CommandRegistration registration{
+    "run", [](CLI::App& app) {
+      auto options = std::make_shared<palpable::tools::RunOptions>();
+      auto summary_path = std::make_shared<std::string>();
+      auto end = std::make_shared<double>(0.0);
+      app.description(
+          "Simulate a scene file (format palpable-scene/1, see scenarios/README.md) and print a\n"
+          "summary: virtual and wall time, events by kind and, when the scene names a closed-form\n"
+          "reference, the error figures against it. Output files are written atomically: a run\n"
+          "that fails leaves none behind.\n\n"
+          "Example:\n"
+          "  palpable run scenarios/block_on_ramp_decelerating.json --trace block.csv \\\n"
+          "      --set /settings/envelope=1e-5 --set /materials/pairs/0/friction=0.6");
+      app.add_option("scene", options->scene_path, "Scene file (JSON), or - for standard input")
+          ->required();
+      app.add_option("--set", options->overrides,
+                     "Override a scene value: /json/pointer=value (RFC 6901 pointer; the value is\n"
+                     "parsed as JSON, a bare word is a string). Repeatable.");
+      app.add_option(
+          "--trace", options->trace_path,
+          "Write the trace CSV (t,body,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz; world frame)");
+      app.add_option(
+          "--events", options->events_path,
+          "Write the collision events CSV (t,kind,body_a,body_b,px,py,pz,nx,ny,nz,jx,jy,jz,"
+          "approach_speed,...)");
+      auto* end_option =
+          app.add_option("--end", *end, "End time [s], replacing the scene's end_time");
+      app.add_option("--summary-json", *summary_path,
+                     "Write the summary (statistics, wall time, reference figures) as JSON");
+      return std::function<int()>([options, summary_path, end, end_option] {
+        if (end_option->count() > 0) options->end_time = *end;
+        options->progress = ::isatty(2) != 0;
+        palpable::tools::RunResult result = palpable::tools::run_scene(*options);
+        std::cout << palpable::tools::summary_text(result);
+        if (!summary_path->empty()) {
+          palpable::tools::AtomicFile out(*summary_path);
+          out.stream() << palpable::tools::summary_json(result).dump(2) << "\n";
+          out.commit();
+        }
+        return palpable::tools::kExitOk;
+      });
+    }};
+
+}  // namespace

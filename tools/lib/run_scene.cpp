@@ -1,0 +1,201 @@
+#include "tools/lib/run_scene.hpp"
+
+#include "core/check.hpp"
+#include "scenarios/reference.hpp"
+#include "tools/lib/atomic_file.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <ctime>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+#include <unistd.h>
+
+namespace palpable::tools {
+namespace {
+
+void put_number(std::ostream& out, double x) {
+  out << std::setprecision(17) << x;
+}
+
+// Streams samples into the trace CSV and keeps them in memory for the reference comparison;
+// streams collisions into the events CSV.
+class RunObserver : public SimulationObserver {
+ public:
+  RunObserver(const World& world, AtomicFile* trace, AtomicFile* events, Trace* memory)
+      : trace_(trace), events_(events), memory_(memory) {
+    for (const Body& b : world.bodies) names_.push_back(b.name);
+    memory_->body_names = names_;
+    if (trace_) trace_->stream() << kTraceHeader << "\n";
+    if (events_) {
+      events_->stream() << "t,kind,body_a,body_b,px,py,pz,nx,ny,nz,jx,jy,jz,approach_speed,"
+                           "energy_change,centre_of_pressure\n";
+    }
+  }
+  void on_sample(double t, const std::vector<BodyState>& states) override {
+    for (const BodyState& s : states) {
+      if (!s.x_W.allFinite() || !s.v_W.allFinite() || !s.w_W.allFinite() ||
+          !s.q_WM.coeffs().allFinite()) {
+        throw std::runtime_error("non-finite state at t = " + std::to_string(t) +
+                                 " (no trace written)");
+      }
+    }
+    if (trace_) write_trace_rows(trace_->stream(), t, names_, states);
+    memory_->times.push_back(t);
+    memory_->samples.push_back(states);
+  }
+  void on_collision(const CollisionRecord& r) override {
+    if (!events_) return;
+    std::ostream& out = events_->stream();
+    put_number(out, r.t);
+    out << ',' << (r.kind == CollisionKind::kMicrocollision ? "microcollision" : "collision") << ','
+        << names_[r.a.index] << ',' << names_[r.b.index];
+    for (const Vec3* v : {&r.p_W, &r.n_W, &r.impulse_W}) {
+      for (int i = 0; i < 3; ++i) {
+        out << ',';
+        put_number(out, (*v)[i]);
+      }
+    }
+    out << ',';
+    put_number(out, r.approach_speed);
+    out << ',';
+    put_number(out, r.energy_change);
+    out << ',' << (r.centre_of_pressure ? 1 : 0) << '\n';
+  }
+
+ private:
+  std::vector<std::string> names_;
+  AtomicFile* trace_;
+  AtomicFile* events_;
+  Trace* memory_;
+};
+
+}  // namespace
+
+RunResult run_scene(const RunOptions& options) {
+  nlohmann::json document = read_json_file(options.scene_path);
+  for (const std::string& assignment : options.overrides) apply_override(document, assignment);
+  RunResult result;
+  result.scene = scene_from_json(document, options.scene_path);
+  if (options.end_time) {
+    if (!(*options.end_time > 0.0) || !std::isfinite(*options.end_time)) {
+      throw InputError("--end", "expected a positive number of seconds");
+    }
+    result.scene.end_time = *options.end_time;
+  }
+  const Scene& scene = result.scene;
+
+  SimulationOptions sim_options;
+  sim_options.output_interval = scene.output_interval;
+  Simulation simulation(scene.world, sim_options);  // validates (overlaps) before any file opens
+
+  std::unique_ptr<AtomicFile> trace_file, events_file;
+  if (!options.trace_path.empty()) trace_file = std::make_unique<AtomicFile>(options.trace_path);
+  if (!options.events_path.empty()) events_file = std::make_unique<AtomicFile>(options.events_path);
+  RunObserver observer(scene.world, trace_file.get(), events_file.get(), &result.trace);
+
+  const auto wall_start = std::chrono::steady_clock::now();
+  const std::clock_t cpu_start = std::clock();
+  auto last_report = wall_start;
+  bool reported = false;
+  std::function<void(double)> progress;
+  if (options.progress) {
+    progress = [&](double t) {
+      auto now = std::chrono::steady_clock::now();
+      if (now - wall_start < std::chrono::seconds(1) ||
+          now - last_report < std::chrono::milliseconds(250)) {
+        return;
+      }
+      last_report = now;
+      reported = true;
+      std::cerr << "\r" << scene.name << ": t = " << std::fixed << std::setprecision(3) << t
+                << " / " << scene.end_time << " s (" << std::setprecision(0)
+                << 100.0 * t / scene.end_time << " %)" << std::defaultfloat << std::flush;
+    };
+  }
+  simulation.run_until(scene.end_time, &observer, progress);
+  if (reported) std::cerr << "\r" << std::string(60, ' ') << "\r" << std::flush;
+  result.cpu_time_s = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
+  result.wall_time_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  result.stats = simulation.stats();
+
+  if (!scene.reference.is_null() && !result.trace.times.empty()) {
+    result.reference =
+        compare_with_reference(scene.reference, result.trace, scene.source + ":/reference");
+  }
+  if (trace_file) trace_file->commit();
+  if (events_file) events_file->commit();
+  return result;
+}
+
+nlohmann::json summary_json(const RunResult& r) {
+  const SimulationStats& s = r.stats;
+  nlohmann::json j;
+  j["scene"] = r.scene.name;
+  j["virtual_time_s"] = r.scene.end_time;
+  j["wall_time_s"] = r.wall_time_s;
+  j["cpu_time_s"] = r.cpu_time_s;
+  j["events"] = s.events;
+  j["collisions"] = s.collisions;
+  j["microcollisions"] = s.microcollisions;
+  j["pair_checks"] = s.pair_checks;
+  j["statistics"] = {{"bound_queries", s.bound_queries},
+                     {"horizon_refreshes", s.horizon_refreshes},
+                     {"samples", s.samples},
+                     {"rescheduled", s.rescheduled},
+                     {"retries", s.retries},
+                     {"retry_limit_hits", s.retry_limit_hits},
+                     {"floored_bounds", s.floored_bounds},
+                     {"exact_bounds", s.exact_bounds},
+                     {"penetrations", s.penetrations},
+                     {"distance_failures", s.distance_failures},
+                     {"impulse_failures", s.impulse_failures},
+                     {"centre_of_pressure", s.centre_of_pressure},
+                     {"feature_steps", s.feature_steps},
+                     {"integration_steps", s.integration_steps},
+                     {"pairs_created", s.pairs_created},
+                     {"max_pairs", s.max_pairs}};
+  const Settings& st = r.scene.world.settings;
+  j["settings"] = {{"envelope", st.envelope_m},
+                   {"microcollision_speed", st.microcollision_speed_mps},
+                   {"integration_tolerance", st.integration_tolerance},
+                   {"restitution_law", std::string(to_string(st.restitution_law))},
+                   {"microcollision_rule", std::string(to_string(st.microcollision_rule))}};
+  if (!r.reference.is_null()) j["reference"] = r.reference;
+  return j;
+}
+
+std::string summary_text(const RunResult& r) {
+  const SimulationStats& s = r.stats;
+  std::ostringstream out;
+  out << "scene            " << r.scene.name << "\n"
+      << "virtual time     " << r.scene.end_time << " s\n"
+      << "wall time        " << std::setprecision(3) << r.wall_time_s << " s\n"
+      << std::setprecision(6) << "events           " << s.events << "  (pair checks "
+      << s.pair_checks << ", horizon refreshes " << s.horizon_refreshes << ", samples " << s.samples
+      << ")\n"
+      << "collisions       " << s.collisions << "  microcollisions " << s.microcollisions
+      << "  (centre of pressure " << s.centre_of_pressure << ")\n"
+      << "numerical        retries " << s.retries << ", retry-limit hits " << s.retry_limit_hits
+      << ", floored bounds " << s.floored_bounds << ", penetrations " << s.penetrations
+      << ", distance failures " << s.distance_failures << ", impulse failures "
+      << s.impulse_failures << "\n";
+  const Settings& st = r.scene.world.settings;
+  out << "settings         envelope " << st.envelope_m << " m, integration tolerance "
+      << st.integration_tolerance << ", law " << to_string(st.restitution_law)
+      << ", microcollision rule " << to_string(st.microcollision_rule) << "\n";
+  if (!r.reference.is_null()) {
+    out << "reference        " << r.reference.value("reference", std::string("?")) << "\n";
+    for (auto it = r.reference.begin(); it != r.reference.end(); ++it) {
+      if (it.key() == "reference") continue;
+      out << "  " << std::left << std::setw(30) << it.key() << " " << it.value().dump() << "\n";
+    }
+  }
+  return out.str();
+}
+
+}  // namespace palpable::tools
