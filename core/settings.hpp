@@ -60,6 +60,12 @@ struct Settings {
   // fixed rule (DESIGN.md §2) so that the same shape always gets the same body frame.
   double equal_moment_tolerance = 1e-10;
 
+  // Relative difference of principal moments below which they count as equal [-] (ballistic
+  // motion, core/ballistic.hpp): equal moments select the closed-form spherical or axisymmetric
+  // rotation. A body whose moments differ by delta (relative) below this moves as if symmetric,
+  // with an orientation error ~ delta * |omega| * t; larger is never needed for accuracy.
+  double inertia_symmetry_tolerance = 1e-12;
+
   // Events processed at one instant for one pair before the scheduler reports a rounding loop
   // and moves on (counted in the statistics, never silent).
   int retry_limit = 100;
