@@ -23,7 +23,7 @@ CollisionParameters params_for(double mu, double e, RestitutionLaw law) {
   return params;
 }
 
-TEST_CASE("v_micro = sqrt(2 g_n envelope) unless set; the test has a little slack",
+TEST_CASE("v_micro = sqrt(2 g_n envelope) unless set, the test has a little slack",
           "[impulse][micro]") {
   Settings settings;
   settings.envelope_m = 1e-4;
