@@ -12,6 +12,15 @@
 // tolerance; maximum compression (u_z = 0), the end of restitution and the slip zero (|u_t| -> 0)
 // are located to the integration tolerance (root finding on the Dormand-Prince dense output, or
 // closed form where the slip direction is constant); u_final = u0 + K_c p to rounding.
+//
+// Cost: frictionless contacts and slides whose direction does not turn (2D, spheres, stick at
+// p_z = 0) are closed form, with no Runge-Kutta step. A 3D slip whose direction turns is
+// integrated; near a slip zero the step shrinks in proportion to |u_t| (the tangential dynamics
+// is self-similar there), so reaching it costs O(log 1/tol) steps. Where the friction direction
+// is stiff near the slip zero (strongly anisotropic K_t), |u_t| can stall under an explicit
+// step; the slip zero is then reached by an implicit landing step (counted in
+// stalled_slip_landings). Over 100,000 random contacts the default tolerance stays within 1e-6
+// (relative) of a 1e-13 solution, but that, not 1e-9, is the measured global accuracy there.
 #include "core/settings.hpp"
 #include "core/types.hpp"
 
