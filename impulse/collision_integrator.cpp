@@ -33,6 +33,8 @@ std::string_view to_string(PhaseKind kind) {
     case PhaseKind::kReboundFloor: return "restitution extended to the rebound floor";
     case PhaseKind::kReversed: return "reversed";
     case PhaseKind::kDriftFreeTarget: return "drift-free target";
+    case PhaseKind::kDriftFreeConeBoundary:
+      return "drift-free target outside the cone: cone-boundary impulse";
     case PhaseKind::kMicroFallback: return "microcollision target outside the cone: integrated";
   }
   return "unknown";

@@ -48,14 +48,15 @@ inline bool succeeded(CollisionStatus s) {
 
 // What happened during a collision, in order.
 enum class PhaseKind {
-  kFrictionless,     // mu = 0: closed form along K e_z
-  kSlid,             // sliding with a (possibly turning) slip direction, integrated
-  kStuckStably,      // |u_t| reached 0 and sticking is stable: u_t stays 0 (closed form)
-  kResumedSliding,   // |u_t| reached 0, sticking unstable: slides on in a fixed `direction`
-  kReboundFloor,     // restitution extended until u_z = the microcollision rebound floor
-  kReversed,         // microcollision, Mirtich's reversal rule, inside the friction cone
-  kDriftFreeTarget,  // microcollision, drift-free target inside the friction cone
-  kMicroFallback,    // microcollision target outside the cone: ordinary integration
+  kFrictionless,           // mu = 0: closed form along K e_z
+  kSlid,                   // sliding with a (possibly turning) slip direction, integrated
+  kStuckStably,            // |u_t| reached 0 and sticking is stable: u_t stays 0 (closed form)
+  kResumedSliding,         // |u_t| reached 0, sticking unstable: slides on in a fixed `direction`
+  kReboundFloor,           // restitution extended until u_z = the microcollision rebound floor
+  kReversed,               // microcollision, Mirtich's reversal rule, inside the friction cone
+  kDriftFreeTarget,        // microcollision, drift-free target inside the friction cone
+  kDriftFreeConeBoundary,  // drift-free target outside the cone: cone-boundary impulse
+  kMicroFallback,          // microcollision target outside the cone: ordinary integration
 };
 std::string_view to_string(PhaseKind kind);
 
