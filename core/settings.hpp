@@ -39,6 +39,10 @@ struct Settings {
   // contact as sqrt(2 g_n envelope) (DESIGN.md §4).
   double microcollision_speed_mps = -1.0;
 
+  // Relative slack of the microcollision test: approach speed <= v_micro (1 + slack) [-]. A
+  // resting body returns at exactly v_micro, which must still count as a microcollision.
+  double microcollision_speed_slack = 1e-6;
+
   // Relative tolerance of the adaptive Runge-Kutta integration of a collision over p_z [-].
   // Smaller is more accurate and costs more integration steps.
   double integration_tolerance = 1e-9;
