@@ -155,7 +155,7 @@ TEST_CASE("Hull of points on a sphere is a valid triangulated-or-merged mesh") {
   CHECK(p.max_radius() <= 1.0 + 1e-3);
 }
 
-TEST_CASE("Noise below the coplanarity tolerance is merged away; above it, faces stay apart") {
+TEST_CASE("Noise below the coplanarity tolerance is merged away, above it, faces stay apart") {
   const std::uint64_t seed = 99;
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
