@@ -33,6 +33,8 @@ std::string_view to_string(PhaseKind kind) {
     case PhaseKind::kReboundFloor: return "restitution extended to the rebound floor";
     case PhaseKind::kReversed: return "reversed";
     case PhaseKind::kDriftFreeTarget: return "drift-free target";
+    case PhaseKind::kDriftFreeConeBoundary:
+      return "drift-free target outside the cone: cone-boundary impulse";
     case PhaseKind::kMicroFallback: return "microcollision target outside the cone: integrated";
   }
   return "unknown";
@@ -151,6 +153,8 @@ class Solver {
     p_ref_ = v_ref_ / K(2, 2);
     slip_tolerance_ = params.tolerance * v_ref_;
     stall_slip_ = std::sqrt(params.tolerance) * v_ref_;
+    const Eigen::Matrix2d K_t = K.topLeftCorner<2, 2>();
+    stable_stick_ = (K_t.inverse() * Vec2(K.block<2, 1>(0, 2))).norm() <= params.friction;
   }
 
   Vec3 velocity() const { return u0_ + K_ * Vec3(y_(0), y_(1), p_z_); }
@@ -300,9 +304,26 @@ class Solver {
       // within a vanishing p_z), and an explicit step can cycle without reducing |u_t| while
       // passing its error test. If |u_t| stalls there, land on the slip zero implicitly.
       const bool stalled = since_progress >= 8 && s <= stall_slip_;
-      if (s <= slip_tolerance_ || frozen_is_accurate || stalled) {
+      if (s <= slip_tolerance_ || stalled) {
+        // The slip zero, to tolerance: land on it (exactly, when sticking is stable) and let the
+        // caller test the stick. If even the landing direction would not reduce |u_t| (an
+        // unstable stick approached to within the tolerance), the residual slip is dropped.
         if (stalled) ++r_.stalled_slip_landings;
-        return linear(landing_zeta(u_t, zeta_t), true, status);
+        const Vec3 zeta = landing_zeta(u_t, zeta_t);
+        const Vec2 d_land = (K_ * zeta).head<2>();
+        if (u_t.dot(d_land) < 0.0) return linear(zeta, true, status);
+        return SlideEnd::kSlipZero;
+      }
+      if (frozen_is_accurate) return linear(Vec3(zeta_t.x(), zeta_t.y(), 1.0), true, status);
+      if (ds < 0.0 && stable_stick_) {
+        // A slip that can stick stably, heading into the origin: the implicit landing direction
+        // (the constant one that reaches u_t = 0) differs from the integrated one by |dt|; using
+        // it for the rest of the approach errs by about mu |dt| |u_t| / |d|u_t|/dp_z|.
+        const Vec3 zeta = landing_zeta(u_t, zeta_t);
+        const double dt = (zeta.head<2>() - zeta_t).norm();
+        if (10.0 * dt * (s / -ds) <= params_.tolerance * p_scale) {
+          return linear(zeta, true, status);
+        }
       }
       if (ds < 0.0) {
         // Stop short of the predicted slip zero so that no stage evaluates the direction there.
@@ -509,6 +530,7 @@ class Solver {
   Stage stage_ = Stage::kCompression;
   double p_z_end_ = 0.0, u_z_end_ = 0.0;
   bool floor_phase_recorded_ = false;
+  bool stable_stick_ = false;  // |K_t^-1 k| <= mu (DESIGN.md §4)
   Vec2 direction_ = Vec2::Zero();
 };
 

@@ -12,6 +12,15 @@
 // tolerance; maximum compression (u_z = 0), the end of restitution and the slip zero (|u_t| -> 0)
 // are located to the integration tolerance (root finding on the Dormand-Prince dense output, or
 // closed form where the slip direction is constant); u_final = u0 + K_c p to rounding.
+//
+// Cost: frictionless contacts and slides whose direction does not turn (2D, spheres, stick at
+// p_z = 0) are closed form, with no Runge-Kutta step. A 3D slip whose direction turns is
+// integrated; near a slip zero the step shrinks in proportion to |u_t| (the tangential dynamics
+// is self-similar there), so reaching it costs O(log 1/tol) steps. Where the friction direction
+// is stiff near the slip zero (strongly anisotropic K_t), |u_t| can stall under an explicit
+// step; the slip zero is then reached by an implicit landing step (counted in
+// stalled_slip_landings). Over 100,000 random contacts the default tolerance stays within 1e-6
+// (relative) of a 1e-13 solution, but that, not 1e-9, is the measured global accuracy there.
 #include "core/settings.hpp"
 #include "core/types.hpp"
 
@@ -39,14 +48,15 @@ inline bool succeeded(CollisionStatus s) {
 
 // What happened during a collision, in order.
 enum class PhaseKind {
-  kFrictionless,     // mu = 0: closed form along K e_z
-  kSlid,             // sliding with a (possibly turning) slip direction, integrated
-  kStuckStably,      // |u_t| reached 0 and sticking is stable: u_t stays 0 (closed form)
-  kResumedSliding,   // |u_t| reached 0, sticking unstable: slides on in a fixed `direction`
-  kReboundFloor,     // restitution extended until u_z = the microcollision rebound floor
-  kReversed,         // microcollision, Mirtich's reversal rule, inside the friction cone
-  kDriftFreeTarget,  // microcollision, drift-free target inside the friction cone
-  kMicroFallback,    // microcollision target outside the cone: ordinary integration
+  kFrictionless,           // mu = 0: closed form along K e_z
+  kSlid,                   // sliding with a (possibly turning) slip direction, integrated
+  kStuckStably,            // |u_t| reached 0 and sticking is stable: u_t stays 0 (closed form)
+  kResumedSliding,         // |u_t| reached 0, sticking unstable: slides on in a fixed `direction`
+  kReboundFloor,           // restitution extended until u_z = the microcollision rebound floor
+  kReversed,               // microcollision, Mirtich's reversal rule, inside the friction cone
+  kDriftFreeTarget,        // microcollision, drift-free target inside the friction cone
+  kDriftFreeConeBoundary,  // drift-free target outside the cone: cone-boundary impulse
+  kMicroFallback,          // microcollision target outside the cone: ordinary integration
 };
 std::string_view to_string(PhaseKind kind);
 

@@ -7,6 +7,23 @@
 
 namespace palpable {
 
+namespace {
+
+// The result of applying a given impulse p_c (no integration).
+CollisionResult direct_impulse(const Mat3& K_c, const Vec3& u0_c, const Vec3& p_c, PhaseKind kind) {
+  CollisionResult result;
+  result.u0_c = u0_c;
+  result.p_c = p_c;
+  result.u_final_c = u0_c + K_c * p_c;
+  result.energy_change = 0.5 * (u0_c + result.u_final_c).dot(p_c);
+  // u is linear in p along a straight impulse path, so W_z is the trapezoid.
+  result.work_normal = 0.5 * (u0_c.z() + result.u_final_c.z()) * p_c.z();
+  result.add_phase(kind, 0.0);
+  return result;
+}
+
+}  // namespace
+
 double microcollision_speed(const Settings& settings, double g_n) {
   if (settings.microcollision_speed_mps >= 0.0) return settings.microcollision_speed_mps;
   return std::sqrt(2.0 * std::max(g_n, 0.0) * settings.envelope_m);
@@ -45,14 +62,26 @@ CollisionResult resolve_microcollision(const Mat3& K_c, const Vec3& u0_c,
   }
   const Vec3 p_c = K_c.ldlt().solve(target - u0_c);
   if (p_c.allFinite() && in_friction_cone(p_c, params.friction, 1e-12)) {
-    CollisionResult result;
-    result.u0_c = u0_c;
-    result.p_c = p_c;
-    result.u_final_c = u0_c + K_c * p_c;
-    result.energy_change = 0.5 * (u0_c + result.u_final_c).dot(p_c);
-    result.work_normal = 0.5 * (u0_c.z() + result.u_final_c.z()) * p_c.z();
-    result.add_phase(kind, 0.0);
-    return result;
+    return direct_impulse(K_c, u0_c, p_c, kind);
+  }
+  if (rule == MicrocollisionRule::kDriftFree) {
+    // Outside the cone: the impulse on the cone boundary, friction toward the tangential target
+    // (the direction of the unconstrained impulse's tangential part), that reaches the normal
+    // target through the full K (DESIGN.md §4). This is what lets a block that slid to a stop
+    // reach the drift-free two-bounce cycle within a few bounces: the ordinary integration
+    // would stop its slip at 0 on every bounce, and it would creep a_t tau / 2 like the
+    // reversal rule.
+    const Vec2 p_t = p_c.head<2>();
+    const double p_t_norm = p_t.norm();
+    if (p_t_norm > 0.0) {
+      const Vec2 d = params.friction * p_t / p_t_norm;
+      const Vec3 zeta(d.x(), d.y(), 1.0);
+      const double rate = K_c.row(2).dot(zeta);  // du_z per unit normal impulse
+      const double p_n = rate > 0.0 ? (target.z() - u0_c.z()) / rate : -1.0;
+      if (p_n >= 0.0 && std::isfinite(p_n)) {
+        return direct_impulse(K_c, u0_c, p_n * zeta, PhaseKind::kDriftFreeConeBoundary);
+      }
+    }
   }
   CollisionResult result = integrate_collision(K_c, u0_c, floored);
   // Record the fallback first: shift the integrator's phases by one.

@@ -8,8 +8,11 @@
 // Two rules (Settings::microcollision_rule):
 //  - drift-free (default): aim at u' = (-a_t tau / 2, max(-e u_z0, v_micro)), tau = 2 u_z'/g_n
 //    the flight to the next bounce, so that the slip averages to zero over that flight; apply
-//    p = K^-1 (u' - u0) if it lies in the friction cone, else the ordinary integration with the
-//    floor (DESIGN.md allows this simpler fallback);
+//    p = K^-1 (u' - u0) if it lies in the friction cone, else the impulse on the cone boundary
+//    with friction toward the tangential target that reaches the normal target through the full
+//    K. (DESIGN.md also allows the ordinary integration with the floor as the fallback; measured
+//    here, that fallback makes a block that slid to a stop creep exactly like the reversal
+//    rule, so it is used only if the boundary impulse cannot reach the normal target.)
 //  - reversal (Mirtich): u' = (-u_t0, max(-u_z0, v_micro)), same cone check and fallback.
 // The e-law rebound used in the drift-free target is -e u_z0: what all three laws give when the
 // slip direction does not change. Below v_micro it is dominated by the floor whenever e < 1.

@@ -304,7 +304,7 @@ TEST_CASE("Sphere: closed form") {
   CHECK(by_mass.principal_moments[0] == Approx(0.4 * 3.0 * 0.0625).epsilon(1e-15));
 }
 
-TEST_CASE("Rotated box: same principal moments; q_MB maps principal axes onto the box axes") {
+TEST_CASE("Rotated box: same principal moments and q_MB maps principal axes onto the box axes") {
   const std::uint64_t seed = 11;
   std::mt19937_64 rng(seed);
   const Vec3 half(0.3, 0.5, 0.7);

@@ -67,7 +67,7 @@ TEST_CASE("box() and prism() are valid meshes with exact counts and planes") {
   }
 }
 
-TEST_CASE("Random point clouds give valid hulls; support and max_radius match brute force") {
+TEST_CASE("Random point clouds give valid hulls, support and max_radius match brute force") {
   const std::uint64_t seed = 977;
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);

@@ -82,7 +82,7 @@ TEST_CASE("K is symmetric positive definite for random bodies, any frame", "[imp
   }
 }
 
-TEST_CASE("apply_impulse: body 2 receives -p; momentum and angular momentum are conserved",
+TEST_CASE("apply_impulse: body 2 receives -p, momentum and angular momentum are conserved",
           "[impulse][apply]") {
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> unit(-1.0, 1.0);

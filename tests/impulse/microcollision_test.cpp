@@ -23,7 +23,7 @@ CollisionParameters params_for(double mu, double e, RestitutionLaw law) {
   return params;
 }
 
-TEST_CASE("v_micro = sqrt(2 g_n envelope) unless set; the test has a little slack",
+TEST_CASE("v_micro = sqrt(2 g_n envelope) unless set, the test has a little slack",
           "[impulse][micro]") {
   Settings settings;
   settings.envelope_m = 1e-4;
@@ -65,6 +65,13 @@ TEST_CASE("the rebound floor: every microcollision separates at >= v_micro, unde
       REQUIRE(r.phase_count >= 1);
       if (r.phases[0].kind == PhaseKind::kMicroFallback) {
         ++fallback[rule];
+      } else if (r.phases[0].kind == PhaseKind::kDriftFreeConeBoundary) {
+        // On the cone boundary, reaching the normal target exactly.
+        ++fallback[rule];
+        CHECK(std::hypot(r.p_c.x(), r.p_c.y()) ==
+              Approx(params.friction * r.p_c.z()).epsilon(1e-12));
+        CHECK(r.u_final_c.z() ==
+              Approx(std::max(-params.restitution * u_z0, v_micro)).epsilon(1e-12));
       } else {
         ++in_cone[rule];
         if (which == MicrocollisionRule::kReversal) {
@@ -95,7 +102,7 @@ struct CreepRun {
 };
 
 CreepRun ramp_creep(MicrocollisionRule rule, double theta, double mu, double envelope,
-                    double duration) {
+                    double duration, double initial_slip = 0.0, double settle = 0.0) {
   const double g = 9.81, m = 2.0;
   const Mat3 K = Mat3::Identity() / m;
   MicrocollisionContext context;
@@ -105,10 +112,16 @@ CreepRun ramp_creep(MicrocollisionRule rule, double theta, double mu, double env
   settings.envelope_m = envelope;
   const double v_micro = microcollision_speed(settings, context.g_n);
   const CollisionParameters params = params_for(mu, 0.5, RestitutionLaw::kStronge);
-  Vec3 u(0.0, 0.0, 0.0);  // starts at rest, in contact
-  double x = 0.0, t = 0.0;
+  Vec3 u(initial_slip, 0.0, 0.0);  // in contact, sliding down at initial_slip (or at rest)
+  double x = 0.0, t = 0.0, x_settled = 0.0, t_settled = 0.0;
+  bool settled = settle == 0.0;
   CreepRun run;
-  while (t < duration) {
+  while (t < settle + duration) {
+    if (!settled && t >= settle) {
+      settled = true;
+      x_settled = x;
+      t_settled = t;
+    }
     const CollisionResult r = resolve_microcollision(K, u, params, rule, context, v_micro);
     REQUIRE(r.status == CollisionStatus::kOk);
     const Vec3 u1 = r.u_final_c;
@@ -118,7 +131,7 @@ CreepRun ramp_creep(MicrocollisionRule rule, double theta, double mu, double env
     t += tau;
     ++run.bounces;
   }
-  run.creep_per_second = x / t;
+  run.creep_per_second = (x - x_settled) / (t - t_settled);
   return run;
 }
 
@@ -142,6 +155,18 @@ TEST_CASE("a block resting on a ramp: the reversal rule creeps, the drift-free r
     CHECK(reversal.creep_per_second == Approx(expected).epsilon(0.05));
     CHECK(std::abs(drift_free.creep_per_second) < 1e-5);
   }
+  // A block that slides down onto the contact at 0.05 m/s (the decelerating block): it stops
+  // (mu > tan theta) through ordinary integrations with the floor, then rests. Creep measured
+  // over the second after the first.
+  const CreepRun stopping_reversal =
+      ramp_creep(MicrocollisionRule::kReversal, theta, mu, 1e-4, 1.0, 0.05, 1.0);
+  const CreepRun stopping_drift_free =
+      ramp_creep(MicrocollisionRule::kDriftFree, theta, mu, 1e-4, 1.0, 0.05, 1.0);
+  std::cout << "after stopping from 0.05 m/s, creep over the next 1 s at envelope 1e-4: reversal "
+            << stopping_reversal.creep_per_second << " m, drift-free "
+            << stopping_drift_free.creep_per_second << " m\n";
+  CHECK(stopping_reversal.creep_per_second > 1e-3);
+  CHECK(std::abs(stopping_drift_free.creep_per_second) < 1e-5);
   // Below the band (tan theta <= mu / 2) Mirtich's rule settles into the two-bounce reversal
   // cycle inside the cone and does not creep either.
   const CreepRun shallow = ramp_creep(MicrocollisionRule::kReversal, 0.25, mu, 1e-4, 1.0);

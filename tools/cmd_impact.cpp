@@ -1,0 +1,44 @@
+// `palpable impact SPEC.json`: resolves one collision described in JSON and prints the result as
+// JSON (tools/lib/impact_spec.hpp documents the format; `palpable impact --help` prints it).
+#include "core/check.hpp"
+#include "tools/commands.hpp"
+#include "tools/lib/exit_codes.hpp"
+#include "tools/lib/impact_spec.hpp"
+
+#include <fstream>
+#include <iostream>
+#include <iterator>
+#include <memory>
+#include <sstream>
+
+namespace {
+
+std::string read_all(const std::string& path) {
+  if (path == "-") {
+    return std::string(std::istreambuf_iterator<char>(std::cin), std::istreambuf_iterator<char>());
+  }
+  std::ifstream in(path);
+  if (!in) throw palpable::InputError(path, "cannot open the spec file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+palpable::tools::CommandRegistration registration{
+    "impact", [](CLI::App& app) {
+      app.description(
+          "Resolve one collision (integration over the normal impulse with Coulomb friction, "
+          "DESIGN.md section 4) and print the result as JSON");
+      app.footer(palpable::tools::kImpactSpecHelp);
+      auto path = std::make_shared<std::string>();
+      app.add_option("spec", *path, "JSON spec file, or - for standard input")->required();
+      return std::function<int()>([path] {
+        const palpable::tools::ImpactSpec spec = palpable::tools::parse_impact_spec_text(
+            read_all(*path), *path == "-" ? "<stdin>" : *path);
+        const nlohmann::json result = palpable::tools::resolve_impact(spec);
+        std::cout << result.dump() << "\n";
+        return result["status"] == "ok" ? palpable::tools::kExitOk : palpable::tools::kExitFailure;
+      });
+    }};
+
+}  // namespace
