@@ -10,10 +10,21 @@
 
 namespace palpable {
 
+// Where and when a collision touched (from the events CSV or a run in memory).
+struct ContactEvent {
+  double t = 0.0;
+  std::size_t body_a = 0;  // indices into Trace::body_names
+  std::size_t body_b = 0;
+  Vec3 p_W = Vec3::Zero();
+};
+
 struct Trace {
   std::vector<std::string> body_names;
   std::vector<double> times;
   std::vector<std::vector<BodyState>> samples;  // samples[k][body]
+  // Optional: the collisions, in time order. A resting body's sampled position jitters within
+  // each microcollision flight; its contact points, all taken at the instant of touching, do not.
+  std::vector<ContactEvent> contacts;
 
   // Index of a body by name; throws InputError naming `where` if absent.
   std::size_t body_index(const std::string& name, const std::string& where) const;

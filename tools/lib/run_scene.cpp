@@ -48,6 +48,7 @@ class RunObserver : public SimulationObserver {
     memory_->samples.push_back(states);
   }
   void on_collision(const CollisionRecord& r) override {
+    memory_->contacts.push_back(ContactEvent{r.t, r.a.index, r.b.index, r.p_W});
     if (!events_) return;
     std::ostream& out = events_->stream();
     put_number(out, r.t);
