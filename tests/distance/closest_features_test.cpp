@@ -8,7 +8,10 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <cstdio>
+#include <cstdlib>
+#include <new>
 
 using namespace palpable;
 using namespace palpable::test;
@@ -316,4 +319,42 @@ TEST_CASE("contact patch: face on face, edge on face, vertex on face", "[distanc
     REQUIRE(patch.size() == 2);
     CHECK((patch[0] - patch[1]).norm() == Approx(0.6).epsilon(1e-9));  // y from -0.1 to 0.5
   }
+}
+
+namespace {
+// Counts heap allocations while `counting` is set (for the allocation-free hot path check).
+std::atomic<bool> counting{false};
+std::atomic<long> allocations{0};
+}  // namespace
+
+void* operator new(std::size_t size) {
+  if (counting.load(std::memory_order_relaxed)) allocations.fetch_add(1);
+  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept {
+  std::free(p);
+}
+void operator delete(void* p, std::size_t) noexcept {
+  std::free(p);
+}
+
+TEST_CASE("coherent queries allocate nothing", "[distance][alloc]") {
+  const TestShape a = cube();
+  const TestShape b = hull1280();
+  const TestShape s = ball();
+  const TestShape ground = make_test_shape("ground", Halfspace{Vec3::UnitZ(), 0.0});
+  PairCache c1, c2, c3;
+  double sink = 0.0;
+  const Pose fixed{Vec3(0, 0, 0), Quat::Identity()};
+  counting = true;
+  for (int i = 0; i < 1000; ++i) {
+    const Pose p{Vec3(0.001 * i, 0.2, 1.8), Quat(Eigen::AngleAxisd(0.002 * i, Vec3::UnitY()))};
+    sink += closest_features(*a.geometry, p, *b.geometry, fixed, c1, 10000).distance;
+    sink += closest_features(*s.geometry, p, *a.geometry, fixed, c2, 10000).distance;
+    sink += closest_features(*a.geometry, p, *ground.geometry, fixed, c3, 10000).distance;
+  }
+  counting = false;
+  CHECK(sink > 0.0);
+  CHECK(allocations.load() == 0);
 }

@@ -40,3 +40,23 @@ TEST_CASE("MPR intersection verdicts and penetration of spheres and cubes", "[di
   const TestShape ground = make_test_shape("ground", Halfspace{Vec3::UnitZ(), 0.0});
   CHECK_THROWS_AS(MprShape(*ground.geometry, Pose{}), InputError);
 }
+
+TEST_CASE("penetration recovery follows the sign convention", "[distance][mpr]") {
+  const TestShape box = cube();
+  const Pose lower{};
+  const Pose upper{Vec3(0.05, -0.02, 0.97), Quat(Eigen::AngleAxisd(0.01, Vec3::UnitX()))};
+  PairCache cache;
+  const DistanceResult r = closest_features(*box.geometry, upper, *box.geometry, lower, cache, 100);
+  REQUIRE(r.status == ContactStatus::kPenetrating);
+  const PenetrationRecovery rec =
+      recover_penetration(*box.geometry, upper, *box.geometry, lower, r);
+  REQUIRE(rec.intersecting);
+  CHECK(rec.normal_W.z() > 0.99);  // body 1 (upper) is pushed up
+  CHECK(rec.depth > 0.0);
+  CHECK(rec.depth < 0.05);
+  // Moving body 1 by depth (plus a hair) along the normal separates the pair.
+  const Pose moved{upper.x_W + (rec.depth + 1e-9) * rec.normal_W, upper.q_WM};
+  const DistanceResult after =
+      closest_features(*box.geometry, moved, *box.geometry, lower, cache, 100);
+  CHECK(after.status == ContactStatus::kSeparated);
+}
