@@ -15,6 +15,7 @@
 //
 // The query allocates nothing once the pair's cache has been used (compound pairs size their
 // cache on first use).
+#include "core/settings.hpp"
 #include "core/shape.hpp"
 #include "core/types.hpp"
 #include "distance/feature_mesh.hpp"
@@ -92,8 +93,14 @@ struct DistanceResult {
   int steps = 0;  // feature steps taken (all piece pairs)
 };
 
+// `max_steps` bounds each V-Clip walk (Settings::distance_max_steps; status kFailed beyond it).
 DistanceResult closest_features(const ShapeGeometry& g1, const Pose& pose1, const ShapeGeometry& g2,
                                 const Pose& pose2, PairCache& cache, int max_steps);
+inline DistanceResult closest_features(const ShapeGeometry& g1, const Pose& pose1,
+                                       const ShapeGeometry& g2, const Pose& pose2, PairCache& cache,
+                                       const Settings& settings) {
+  return closest_features(g1, pose1, g2, pose2, cache, settings.distance_max_steps);
+}
 
 // The contact patch (DESIGN.md §4, "The contact point"): where the closest features are parallel
 // within the envelope, the convex polygon or segment shared by the two bodies' contact features,
