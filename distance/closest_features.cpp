@@ -153,8 +153,15 @@ DistanceResult piece_pair(const PosedPiece& a, const PosedPiece& b, FeaturePair&
   // Convex cores (a polyhedron or a sphere's centre) by V-Clip in a's frame, then the radii.
   const Mat3 R_AB = a.R_W.transpose() * b.R_W;
   const Vec3 t_AB = a.R_W.transpose() * (b.x_W - a.x_W);
+  int seed_steps = 0;
+  if (!cache.a.valid() || !cache.b.valid()) {
+    // Cold start: begin at each polyhedron's vertex furthest toward the other's centre (a
+    // downhill walk over the vertex graph) instead of at vertex 0; the walk's steps are counted.
+    cache.a = Feature::vertex(support_walk(*a.piece->mesh, -t_AB, 0, seed_steps));
+    cache.b = Feature::vertex(support_walk(*b.piece->mesh, R_AB.transpose() * t_AB, 0, seed_steps));
+  }
   const VClipResult v = vclip(*a.piece->mesh, *b.piece->mesh, R_AB, t_AB, cache, max_steps);
-  r.steps = v.steps;
+  r.steps = v.steps + seed_steps;
   r.feature1 = v.features.a;
   r.feature2 = v.features.b;
   r.n_W = a.R_W * v.n_A;
