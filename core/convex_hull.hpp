@@ -13,8 +13,11 @@ struct HullPolygons {
   std::vector<std::vector<int>> faces;  // vertex loops, counter-clockwise about the normal
   std::vector<Vec3> normals;            // unit outward normals
   std::vector<double> offsets;          // planes normal . x = offset [m]
-  double tolerance_m = 0.0;             // planarity/convexity tolerance the faces satisfy [m]
-  bool merged = false;                  // true if facets were merged beyond Qhull's own merging
+  // Planarity/convexity tolerance the faces satisfy [m]: the merge tolerance plus rounding at the
+  // scale of the points (64 ulps of the bounding-box diagonal), for meshes validated near the
+  // origin.
+  double tolerance_m = 0.0;
+  bool merged = false;  // true if facets were merged beyond Qhull's own merging
 };
 
 // Throws InputError for fewer than 4 points, non-finite coordinates, and identical, collinear or

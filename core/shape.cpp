@@ -4,6 +4,7 @@
 
 #include "core/check.hpp"
 #include "core/convex_hull.hpp"
+#include "core/mass_properties.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -118,39 +119,21 @@ class ConvexPolyhedronBuilder {
 
   static void shift(ConvexPolyhedron* p, const Vec3& shift_M) {
     for (Vec3& v : p->vertices_) v -= shift_M;
-    for (PolyFace& f : p->faces_) f.offset -= f.normal_M.dot(shift_M);
+    // Offsets again through each face's outermost vertex: subtracting normal . shift from a far
+    // face's offset would round at the scale of the far position, not of the shape.
+    for (PolyFace& f : p->faces_) {
+      f.offset = -kInfinity;
+      int h = f.half_edge;
+      do {
+        f.offset = std::max(f.offset, f.normal_M.dot(p->vertices_[p->half_edges_[h].tail]));
+        h = p->half_edges_[h].next;
+      } while (h != f.half_edge);
+    }
     p->max_radius_ = 0.0;
     for (const Vec3& v : p->vertices_) p->max_radius_ = std::max(p->max_radius_, v.norm());
     p->com_shift_M_ = shift_M;
   }
 };
-
-namespace {
-
-// Centroid of the solid by a fan of tetrahedra from the vertex mean (exact for any closed
-// polyhedron with planar faces); the origin of the modelling frame of hulls.
-Vec3 solid_centroid(const ConvexPolyhedron& p) {
-  Vec3 reference = Vec3::Zero();
-  for (const Vec3& v : p.vertices()) reference += v;
-  reference /= static_cast<double>(p.vertices().size());
-  double volume = 0.0;
-  Vec3 moment = Vec3::Zero();
-  for (const PolyFace& f : p.faces()) {
-    const int h0 = f.half_edge;
-    const Vec3 a = p.tail(h0) - reference;
-    for (int h = p.half_edges()[h0].next; p.half_edges()[h].next != h0;
-         h = p.half_edges()[h].next) {
-      const Vec3 b = p.tail(h) - reference;
-      const Vec3 c = p.head(h) - reference;
-      const double v6 = a.dot(b.cross(c));
-      volume += v6;
-      moment += v6 * (a + b + c);
-    }
-  }
-  return reference + moment / (4.0 * volume);
-}
-
-}  // namespace
 
 ConvexPolyhedron ConvexPolyhedron::from_faces(const std::vector<Vec3>& vertices,
                                               const std::vector<std::vector<int>>& faces,
@@ -170,24 +153,29 @@ ConvexPolyhedron ConvexPolyhedron::from_faces(const std::vector<Vec3>& vertices,
 
 ConvexPolyhedron ConvexPolyhedron::from_points(const std::vector<Vec3>& points,
                                                double coplanar_tolerance) {
+  // Build, recentre, then validate: the checks run on coordinates at the scale of the shape, not
+  // of its position. The centroid comes from the same integrals the mass properties use
+  // (Mirtich 1996 on the polygon faces), so they find the centre of mass at the origin too.
+  auto build = [](const HullPolygons& hull, ConvexPolyhedron* p) {
+    std::string defect =
+        ConvexPolyhedronBuilder::build(hull.vertices, hull.faces, hull.normals, hull.offsets, p);
+    if (!defect.empty()) return defect;
+    ConvexPolyhedronBuilder::shift(p, volume_integrals(*p).centroid);
+    return polyhedron_defect(*p, hull.tolerance_m);
+  };
   HullPolygons hull = convex_hull_polygons(points, coplanar_tolerance);
   ConvexPolyhedron p;
-  std::string defect =
-      ConvexPolyhedronBuilder::build(hull.vertices, hull.faces, hull.normals, hull.offsets, &p);
-  if (defect.empty()) defect = polyhedron_defect(p, hull.tolerance_m);
+  std::string defect = build(hull, &p);
   if (!defect.empty() && hull.merged) {
     // The tolerance-merged faces did not close into a valid mesh (near-degenerate input): fall
-    // back to Qhull's own facets, which are consistent by construction.
+    // back to Qhull's own facets.
     hull = convex_hull_polygons(points, 0.0);
-    defect =
-        ConvexPolyhedronBuilder::build(hull.vertices, hull.faces, hull.normals, hull.offsets, &p);
-    if (defect.empty()) defect = polyhedron_defect(p, hull.tolerance_m);
+    defect = build(hull, &p);
   }
   if (!defect.empty()) {
     throw InputError("points", "the convex hull is degenerate at the coplanarity tolerance " +
                                    std::to_string(hull.tolerance_m) + " m: " + defect);
   }
-  ConvexPolyhedronBuilder::shift(&p, solid_centroid(p));
   return p;
 }
 
@@ -349,10 +337,12 @@ std::string polyhedron_defect(const ConvexPolyhedron& p, double tolerance_m) {
       if (std::abs(face.normal_M.dot(a) - face.offset) > tolerance_m) {
         return fail("face not planar", f);
       }
-      // Convex corner at b: c lies left of the line a->b (seen from outside), within tolerance.
-      const Vec3 ab = b - a;
-      const Vec3 side = face.normal_M.cross(ab);
-      if (side.dot(c - b) < -tolerance_m * ab.norm()) return fail("face not convex", f);
+      // Convex corner at b: b lies outward of the chord a->c (to its right seen from outside);
+      // a reflex corner is allowed only within tolerance of the chord. (Measuring the turn from
+      // the short edge a->b instead would amplify a tolerated offset of b by |c - b| / |b - a|.)
+      const Vec3 ac = c - a;
+      const Vec3 inward = face.normal_M.cross(ac);
+      if (inward.dot(b - a) > tolerance_m * ac.norm()) return fail("face not convex", f);
     }
     for (int v = 0; v < num_v; ++v) {
       if (face.normal_M.dot(vs[v]) - face.offset > tolerance_m) {

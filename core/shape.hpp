@@ -42,7 +42,11 @@ struct PolyFace {
 class ConvexPolyhedron {
  public:
   // The convex hull of `points` (at least 4 not coplanar), via Qhull, coplanar facets merged.
-  // `coplanar_tolerance` [m]: facets whose planes agree within it are merged into one face.
+  // `coplanar_tolerance` [m]: facets whose planes agree within it are merged into one face;
+  // negative: Settings::hull_coplanar_tolerance times the points' bounding-box diagonal; zero:
+  // Qhull's own merging only. Interior and duplicate points are dropped; vertices within the
+  // tolerance of an edge or face are not corners and are dropped too. Throws InputError for
+  // fewer than 4 points, non-finite coordinates, identical, collinear or coplanar points.
   // The vertices are shifted so that the centre of mass of the solid (uniform density) is at the
   // origin; `com_shift_M` reports the shift that was subtracted (points_given - shift = stored).
   static ConvexPolyhedron from_points(const std::vector<Vec3>& points,

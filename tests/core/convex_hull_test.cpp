@@ -185,3 +185,80 @@ TEST_CASE("Noise below the coplanarity tolerance is merged away; above it, faces
   require_counts(flat, 8, 12, 6);
   CHECK(polyhedron_defect(flat, 2e-3) == "");
 }
+
+TEST_CASE("An oversized coplanarity tolerance still yields a valid hull") {
+  const std::uint64_t seed = 123;
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> g(0.0, 1.0);
+  for (double tolerance : {0.05, 0.2, 0.5}) {
+    CAPTURE(seed, tolerance);
+    std::vector<Vec3> points;
+    for (int i = 0; i < 300; ++i) points.push_back(Vec3(g(rng), g(rng), g(rng)).normalized());
+    const auto p = ConvexPolyhedron::from_points(points, tolerance);
+    CHECK(polyhedron_defect(p, tolerance) == "");
+    // Facets were merged (the merged mesh closed, no fall-back to Qhull's facets).
+    CHECK(p.faces().size() < ConvexPolyhedron::from_points(points).faces().size());
+    for (const Vec3& q : points) {
+      for (const PolyFace& f : p.faces()) {
+        CHECK(f.normal_M.dot(q - p.com_shift_M()) - f.offset <= tolerance);
+      }
+    }
+  }
+}
+
+TEST_CASE("Fuzz: varied clouds, scales and positions give valid recentred hulls") {
+  // Sphere points, noisy box faces, clipped clouds, noisy coins, integer lattices (many exactly
+  // coplanar and collinear points); sizes 1e-3..1e3 m at positions up to 5e3 m.
+  const std::uint64_t seed = 2026;
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::normal_distribution<double> g(0, 1);
+  int rejected = 0;
+  for (int trial = 0; trial < 1000; ++trial) {
+    const int kind = trial % 5;
+    const int n = 4 + static_cast<int>(rng() % 200);
+    const Quat q = Quat(g(rng), g(rng), g(rng), g(rng)).normalized();
+    const double noise = std::pow(10.0, -6.0 - static_cast<double>(rng() % 10));
+    const double scale = std::pow(10.0, static_cast<double>(rng() % 7) - 3.0);
+    const Vec3 position = Vec3(5, -3, 2) * std::pow(10.0, static_cast<double>(rng() % 4));
+    CAPTURE(seed, trial, kind, n, noise, scale);
+    std::vector<Vec3> points;
+    for (int i = 0; i < n; ++i) {
+      Vec3 p;
+      if (kind == 0) {
+        p = Vec3(g(rng), g(rng), g(rng)).normalized();
+      } else if (kind == 1) {
+        p = Vec3(u(rng), u(rng), u(rng));
+        p[i % 3] = (i % 2 ? 1 : -1) * (1 + noise * u(rng));
+      } else if (kind == 2) {
+        p = Vec3(u(rng), u(rng), u(rng))
+                .cwiseMax(Vec3::Constant(-0.5))
+                .cwiseMin(Vec3::Constant(0.7));
+      } else if (kind == 3) {
+        const double a = 2 * M_PI * (i / 2) / (n / 2 + 1);
+        p = Vec3(std::cos(a), std::sin(a), (i % 2 ? 0.1 : -0.1) + noise * u(rng));
+      } else {
+        p = Vec3(std::round(u(rng) * 3), std::round(u(rng) * 3), std::round(u(rng) * 3));
+      }
+      points.push_back(position + q * (scale * p));
+    }
+    Vec3 lo = points[0], hi = points[0];
+    for (const Vec3& p : points) {
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+    try {
+      const auto p = ConvexPolyhedron::from_points(points);
+      CHECK(polyhedron_defect(p, 1e-9 * (hi - lo).norm()) == "");
+    } catch (const InputError& e) {
+      // Only genuinely flat inputs (tiny lattices or coins can be) may be refused.
+      const std::string what = e.what();
+      CAPTURE(what);
+      CHECK((what.find("coplanar") != std::string::npos ||
+             what.find("collinear") != std::string::npos));
+      ++rejected;
+    }
+  }
+  CAPTURE(rejected);
+  CHECK(rejected < 50);
+}
