@@ -260,8 +260,7 @@ TEST_CASE("the bound never overshoots on 10,000 random ballistic trajectory pair
       "%ld, reached d_target within min(1.5 bound, 1 s) %ld, overshoots %ld, mean bound/true "
       "%.3f\n",
       trials, count_by_kind[0], count_by_kind[1], count_by_kind[2], count_by_kind[3],
-      count_by_kind[4], finite, exact, contacts, overshoots, contacts ? sum_ratio / contacts : 0.0,
-      min_ratio);
+      count_by_kind[4], finite, exact, contacts, overshoots, contacts ? sum_ratio / contacts : 0.0);
   CHECK(overshoots == 0);
   CHECK(contacts > 1000);
 }
