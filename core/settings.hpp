@@ -73,6 +73,18 @@ struct Settings {
   // Events processed at one instant for one pair before the scheduler reports a rounding loop
   // and moves on (counted in the statistics, never silent).
   int retry_limit = 100;
+
+  // Closest-feature walk (V-Clip, distance module): feature updates allowed in one query before
+  // it reports status `failed` (counted). V-Clip provably terminates; this only guards against
+  // rounding loops. A cold query on a 1280-face hull takes tens of steps.
+  int distance_max_steps = 10000;
+
+  // Minimum progress of a time-of-impact bound [s] (DESIGN.md §3, "Progress"): a conservative
+  // bound below this floor is raised to it and the raise is counted (ToiBound::floored), so a
+  // pair inside the envelope that closes only through rotation cannot stall the scheduler. 0
+  // disables the floor (bounds are then strictly conservative); larger values trade a chance
+  // of stepping past a contact by up to (closing speed) x floor for fewer re-checks.
+  double toi_min_progress_s = 1e-6;
 };
 
 }  // namespace palpable

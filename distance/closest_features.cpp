@@ -1,0 +1,436 @@
+#include "distance/closest_features.hpp"
+
+#include "core/check.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace palpable {
+
+ShapeGeometry::ShapeGeometry(std::shared_ptr<const Shape> shape) : shape_(std::move(shape)) {
+  PALPABLE_CHECK(shape_ != nullptr, "ShapeGeometry needs a shape");
+  meshes_.push_back(std::make_unique<FeatureMesh>(FeatureMesh::point()));
+  if (const auto* compound = std::get_if<Compound>(shape_.get())) {
+    for (const CompoundPart& part : compound->parts) {
+      PALPABLE_CHECK(part.shape != nullptr, "compound part without a shape");
+      add_piece(*part.shape, part.position_M, part.orientation_M.normalized().toRotationMatrix());
+    }
+  } else {
+    add_piece(*shape_, Vec3::Zero(), Mat3::Identity());
+  }
+  for (const Piece& piece : pieces_) {
+    const double reach = piece.p_M.norm() + piece.max_radius;
+    reach_ = std::max(reach_, reach);
+    const bool centred_sphere = piece.kind == PieceKind::kSphere && piece.p_M.norm() == 0.0;
+    if (!centred_sphere) rotation_radius_ = std::max(rotation_radius_, reach);
+  }
+}
+
+void ShapeGeometry::add_piece(const Shape& shape, const Vec3& p_M, const Mat3& R_M) {
+  Piece piece;
+  piece.p_M = p_M;
+  piece.R_M = R_M;
+  if (const auto* sphere = std::get_if<Sphere>(&shape)) {
+    piece.kind = PieceKind::kSphere;
+    piece.mesh = meshes_.front().get();
+    piece.radius = sphere->radius;
+    piece.max_radius = sphere->radius;
+  } else if (const auto* poly = std::get_if<ConvexPolyhedron>(&shape)) {
+    piece.kind = PieceKind::kPolyhedron;
+    meshes_.push_back(std::make_unique<FeatureMesh>(*poly));
+    piece.mesh = meshes_.back().get();
+    piece.max_radius = piece.mesh->max_radius();
+  } else if (const auto* half = std::get_if<Halfspace>(&shape)) {
+    piece.kind = PieceKind::kHalfspace;
+    piece.normal_M = half->normal_M.normalized();
+    piece.offset = half->offset;
+    piece.max_radius = kInfinity;
+  } else {
+    throw InputError("shape", "a compound part must be a sphere, polyhedron or halfspace");
+  }
+  pieces_.push_back(piece);
+}
+
+namespace {
+
+using Piece = ShapeGeometry::Piece;
+using PieceKind = ShapeGeometry::PieceKind;
+
+struct PosedPiece {
+  const Piece* piece;
+  Mat3 R_W;  // piece frame in world
+  Vec3 x_W;
+};
+
+PosedPiece pose_piece(const Piece& piece, const Vec3& x_W, const Mat3& R_WM) {
+  return {&piece, R_WM * piece.R_M, x_W + R_WM * piece.p_M};
+}
+
+// The vertex of `mesh` minimising direction . v, by walking downhill along edges from `start`
+// (the minimum of a linear function over a convex polyhedron's vertex graph has no other local
+// minimum).
+int support_walk(const FeatureMesh& mesh, const Vec3& direction_M, int start, int& steps) {
+  int v = start >= 0 && start < mesh.num_vertices() ? start : 0;
+  double best = direction_M.dot(mesh.vertex(v));
+  while (true) {
+    int next = -1;
+    for (const VoronoiPlane* p = mesh.vertex_planes_begin(v); p != mesh.vertex_planes_end(v); ++p) {
+      const int w = mesh.head_vertex(p->neighbor.index);
+      const double value = direction_M.dot(mesh.vertex(w));
+      if (value < best) {
+        best = value;
+        next = w;
+      }
+    }
+    if (next < 0) return v;
+    v = next;
+    ++steps;
+  }
+}
+
+// Halfspace (posed) against a sphere or polyhedron (posed). Fills the result as if the halfspace
+// were body 2 (n from halfspace to the other piece).
+void halfspace_vs_convex(const PosedPiece& half, const PosedPiece& other, FeaturePair& cache,
+                         DistanceResult& r, Feature& other_feature) {
+  const Vec3 n_W = half.R_W * half.piece->normal_M;
+  const double offset_W = half.piece->offset + n_W.dot(half.x_W);
+  Vec3 deepest_W;
+  if (other.piece->kind == PieceKind::kSphere) {
+    deepest_W = other.x_W - other.piece->radius * n_W;
+    other_feature = Feature::vertex(0);
+  } else {
+    const Vec3 n_M = other.R_W.transpose() * n_W;
+    const int start = cache.a.kind == FeatureKind::kVertex ? cache.a.index : 0;
+    const int v = support_walk(*other.piece->mesh, n_M, start, r.steps);
+    cache.a = Feature::vertex(v);
+    deepest_W = other.x_W + other.R_W * other.piece->mesh->vertex(v);
+    other_feature = Feature::vertex(v);
+  }
+  const double d = n_W.dot(deepest_W) - offset_W;
+  r.n_W = n_W;
+  if (d > 0.0) {
+    r.status = ContactStatus::kSeparated;
+    r.distance = d;
+  } else if (d == 0.0) {
+    r.status = ContactStatus::kTouching;
+    r.distance = 0.0;
+  } else {
+    r.status = ContactStatus::kPenetrating;
+    r.distance = 0.0;
+    r.penetration_depth = -d;
+  }
+  r.p1_W = deepest_W;
+  r.p2_W = deepest_W - d * n_W;
+}
+
+// One piece pair, body 1's piece first.
+DistanceResult piece_pair(const PosedPiece& a, const PosedPiece& b, FeaturePair& cache,
+                          int max_steps) {
+  DistanceResult r;
+  r.penetration_depth = std::numeric_limits<double>::quiet_NaN();
+  const bool a_half = a.piece->kind == PieceKind::kHalfspace;
+  const bool b_half = b.piece->kind == PieceKind::kHalfspace;
+  if (a_half && b_half) {
+    r.status = ContactStatus::kFailed;  // two halfspaces are never paired (both unbounded)
+    return r;
+  }
+  if (b_half) {
+    halfspace_vs_convex(b, a, cache, r, r.feature1);
+    r.feature2 = Feature::face(0);
+    return r;
+  }
+  if (a_half) {
+    // Computed with the halfspace as body 2, then swapped.
+    FeaturePair swapped{cache.b, cache.a};
+    halfspace_vs_convex(a, b, swapped, r, r.feature2);
+    cache = {swapped.b, swapped.a};
+    r.feature1 = Feature::face(0);
+    std::swap(r.p1_W, r.p2_W);
+    r.n_W = -r.n_W;
+    return r;
+  }
+  // Convex cores (a polyhedron or a sphere's centre) by V-Clip in a's frame, then the radii.
+  const Mat3 R_AB = a.R_W.transpose() * b.R_W;
+  const Vec3 t_AB = a.R_W.transpose() * (b.x_W - a.x_W);
+  int seed_steps = 0;
+  if (!cache.a.valid() || !cache.b.valid()) {
+    // Cold start: begin at each polyhedron's vertex furthest toward the other's centre (a
+    // downhill walk over the vertex graph) instead of at vertex 0; the walk's steps are counted.
+    cache.a = Feature::vertex(support_walk(*a.piece->mesh, -t_AB, 0, seed_steps));
+    cache.b = Feature::vertex(support_walk(*b.piece->mesh, R_AB.transpose() * t_AB, 0, seed_steps));
+  }
+  const VClipResult v = vclip(*a.piece->mesh, *b.piece->mesh, R_AB, t_AB, cache, max_steps);
+  r.steps = v.steps + seed_steps;
+  r.feature1 = v.features.a;
+  r.feature2 = v.features.b;
+  r.n_W = a.R_W * v.n_A;
+  const Vec3 core1_W = a.x_W + a.R_W * v.p_a_A;
+  const Vec3 core2_W = a.x_W + a.R_W * v.p_b_A;
+  const double r1 = a.piece->radius;
+  const double r2 = b.piece->radius;
+  r.p1_W = core1_W - r1 * r.n_W;
+  r.p2_W = core2_W + r2 * r.n_W;
+  if (v.status == ContactStatus::kFailed || v.status == ContactStatus::kPenetrating) {
+    r.status = v.status;
+    r.distance = 0.0;
+    return r;
+  }
+  const double d = v.distance - r1 - r2;
+  if (r1 + r2 == 0.0) {
+    r.status = v.status;
+    r.distance = v.distance;
+    return r;
+  }
+  // With a sphere, a core distance of zero means the centre is on the other surface: overlap.
+  if (d > 0.0) {
+    r.status = ContactStatus::kSeparated;
+    r.distance = d;
+  } else if (d == 0.0) {
+    r.status = ContactStatus::kTouching;
+    r.distance = 0.0;
+  } else {
+    r.status = ContactStatus::kPenetrating;
+    r.distance = 0.0;
+    r.penetration_depth = -d;
+  }
+  return r;
+}
+
+}  // namespace
+
+DistanceResult closest_features(const ShapeGeometry& g1, const Pose& pose1, const ShapeGeometry& g2,
+                                const Pose& pose2, PairCache& cache, int max_steps) {
+  const Mat3 R1 = pose1.q_WM.toRotationMatrix();
+  const Mat3 R2 = pose2.q_WM.toRotationMatrix();
+  const auto& pieces1 = g1.pieces();
+  const auto& pieces2 = g2.pieces();
+  if (pieces1.size() == 1 && pieces2.size() == 1) {
+    return piece_pair(pose_piece(pieces1[0], pose1.x_W, R1), pose_piece(pieces2[0], pose2.x_W, R2),
+                      cache.single, max_steps);
+  }
+  const std::size_t n = pieces1.size() * pieces2.size();
+  if (cache.pieces.size() != n) cache.pieces.assign(n, FeaturePair{});
+  DistanceResult best;
+  best.distance = kInfinity;
+  int steps = 0;
+  bool have = false;
+  for (std::size_t i = 0; i < pieces1.size(); ++i) {
+    const PosedPiece a = pose_piece(pieces1[i], pose1.x_W, R1);
+    for (std::size_t j = 0; j < pieces2.size(); ++j) {
+      DistanceResult r = piece_pair(a, pose_piece(pieces2[j], pose2.x_W, R2),
+                                    cache.pieces[i * pieces2.size() + j], max_steps);
+      steps += r.steps;
+      r.piece1 = static_cast<int>(i);
+      r.piece2 = static_cast<int>(j);
+      // Failure and penetration dominate; otherwise the smallest distance.
+      auto rank = [](ContactStatus s) {
+        return s == ContactStatus::kFailed ? 0 : (s == ContactStatus::kPenetrating ? 1 : 2);
+      };
+      if (!have || rank(r.status) < rank(best.status) ||
+          (rank(r.status) == rank(best.status) && r.distance < best.distance)) {
+        best = r;
+        have = true;
+      }
+    }
+  }
+  best.steps = steps;
+  return best;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Contact patch.
+
+namespace {
+
+// The contact feature of a posed piece as world points (DESIGN.md §4, "The contact point"): the
+// face incident to the closest feature that is most aligned with `outward_W`, if all its
+// vertices lie within `limit` of the other body's support plane (height(x) <= limit); else the
+// incident edge with both ends within it; else the closest point alone. A halfspace is unbounded
+// (no points, `unbounded` set); a sphere gives its closest point.
+template <typename Height>
+std::vector<Vec3> contact_feature(const PosedPiece& p, Feature feature, const Vec3& outward_W,
+                                  const Vec3& closest_W, Height&& height, double limit,
+                                  bool& unbounded) {
+  unbounded = false;
+  std::vector<Vec3> points;
+  if (p.piece->kind == PieceKind::kHalfspace) {
+    unbounded = true;
+    return points;
+  }
+  if (p.piece->kind == PieceKind::kSphere || !feature.valid()) {
+    points.push_back(closest_W);
+    return points;
+  }
+  const FeatureMesh& m = *p.piece->mesh;
+  auto world = [&](const Vec3& v_M) { return Vec3(p.x_W + p.R_W * v_M); };
+  const Vec3 outward_M = p.R_W.transpose() * outward_W;
+  int best_face = -1;
+  double best_cos = -kInfinity;
+  std::vector<int> edges;  // half-edges incident to the feature
+  auto consider = [&](int f) {
+    const double c = m.face_normal(f).dot(outward_M);
+    if (c > best_cos) {
+      best_cos = c;
+      best_face = f;
+    }
+  };
+  if (feature.kind == FeatureKind::kFace) {
+    consider(feature.index);
+  } else if (feature.kind == FeatureKind::kEdge) {
+    consider(m.face_of(feature.index));
+    consider(m.face_of(m.twin(feature.index)));
+    edges.push_back(feature.index);
+  } else {
+    for (const VoronoiPlane* q = m.vertex_planes_begin(feature.index);
+         q != m.vertex_planes_end(feature.index); ++q) {
+      consider(m.face_of(q->neighbor.index));
+      edges.push_back(q->neighbor.index);
+    }
+  }
+  const int h0 = m.face_half_edge(best_face);
+  int h = h0;
+  bool face_within = true;
+  do {
+    points.push_back(world(m.tail(h)));
+    face_within = face_within && height(points.back()) <= limit;
+    if (feature.kind == FeatureKind::kFace) edges.push_back(h);
+    h = m.next(h);
+  } while (h != h0);
+  if (face_within) return points;
+  points.clear();
+  double best_height = kInfinity;
+  for (int e : edges) {
+    const Vec3 a = world(m.tail(e));
+    const Vec3 b = world(m.head(e));
+    const double worst = std::max(height(a), height(b));
+    if (worst <= limit && worst < best_height) {
+      best_height = worst;
+      points = {a, b};
+    }
+  }
+  if (points.empty()) points.push_back(closest_W);
+  return points;
+}
+
+using Vec2 = Eigen::Vector2d;
+
+double cross2(const Vec2& a, const Vec2& b) {
+  return a.x() * b.y() - a.y() * b.x();
+}
+
+// Removes repeated points (closer than `tol`) and makes a polygon counter-clockwise.
+std::vector<Vec2> tidy(const std::vector<Vec2>& in, double tol) {
+  std::vector<Vec2> out;
+  for (const Vec2& p : in) {
+    if (out.empty() || (p - out.back()).norm() > tol) out.push_back(p);
+  }
+  while (out.size() > 1 && (out.front() - out.back()).norm() <= tol) out.pop_back();
+  if (out.size() >= 3) {
+    double area = 0.0;
+    for (std::size_t i = 0; i < out.size(); ++i) area += cross2(out[i], out[(i + 1) % out.size()]);
+    if (area < 0.0) std::reverse(out.begin(), out.end());
+    if (std::abs(area) <= tol * tol) {
+      // Collinear points: keep the two extremes.
+      std::size_t i0 = 0, i1 = 0;
+      const Vec2 dir = out[1] - out[0];
+      for (std::size_t i = 0; i < out.size(); ++i) {
+        if (out[i].dot(dir) < out[i0].dot(dir)) i0 = i;
+        if (out[i].dot(dir) > out[i1].dot(dir)) i1 = i;
+      }
+      out = {out[i0], out[i1]};
+    }
+  }
+  return out;
+}
+
+// Intersection of two convex sets given as points (1 point, a segment of 2, or a CCW polygon).
+std::vector<Vec2> intersect(const std::vector<Vec2>& a, const std::vector<Vec2>& b) {
+  if (a.size() == 1) return a;
+  if (b.size() == 1) return b;
+  if (a.size() == 2 && b.size() == 2) {
+    const Vec2 dir = (a[1] - a[0]).normalized();
+    const double a0 = a[0].dot(dir), a1 = a[1].dot(dir);
+    const double lo = std::max(std::min(a0, a1), std::min(b[0].dot(dir), b[1].dot(dir)));
+    const double hi = std::min(std::max(a0, a1), std::max(b[0].dot(dir), b[1].dot(dir)));
+    if (lo > hi) return {};
+    auto at = [&](double s) { return Vec2(a[0] + ((s - a0) / (a1 - a0)) * (a[1] - a[0])); };
+    return {at(lo), at(hi)};
+  }
+  // Clip the smaller-dimensional set (or a) against each edge of the polygon.
+  const std::vector<Vec2>& poly = a.size() == 2 ? b : (b.size() == 2 ? a : b);
+  std::vector<Vec2> subject = a.size() == 2 ? a : (b.size() == 2 ? b : a);
+  const bool segment = subject.size() == 2;
+  for (std::size_t i = 0; i < poly.size() && !subject.empty(); ++i) {
+    const Vec2& e0 = poly[i];
+    const Vec2 e = poly[(i + 1) % poly.size()] - e0;
+    std::vector<Vec2> out;
+    const std::size_t count = segment ? 1 : subject.size();
+    for (std::size_t k = 0; k < count; ++k) {
+      const Vec2& p = subject[k];
+      const Vec2& q = subject[(k + 1) % subject.size()];
+      const double sp = cross2(e, p - e0);
+      const double sq = cross2(e, q - e0);
+      if (sp >= 0.0) out.push_back(p);
+      if ((sp < 0.0 && sq > 0.0) || (sp > 0.0 && sq < 0.0))
+        out.push_back(p + (sp / (sp - sq)) * (q - p));
+      if (segment && sq >= 0.0) out.push_back(q);
+    }
+    subject = out;
+  }
+  return subject;
+}
+
+}  // namespace
+
+std::vector<Vec3> contact_patch(const ShapeGeometry& g1, const Pose& pose1, const ShapeGeometry& g2,
+                                const Pose& pose2, const DistanceResult& closest,
+                                double envelope_m) {
+  if (closest.status != ContactStatus::kSeparated && closest.status != ContactStatus::kTouching) {
+    return {};
+  }
+  const PosedPiece a =
+      pose_piece(g1.pieces()[closest.piece1], pose1.x_W, pose1.q_WM.toRotationMatrix());
+  const PosedPiece b =
+      pose_piece(g2.pieces()[closest.piece2], pose2.x_W, pose2.q_WM.toRotationMatrix());
+  const Vec3& n = closest.n_W;
+  const double limit = closest.distance + envelope_m;
+  bool unbounded1 = false, unbounded2 = false;
+  // Body 1's contact feature within the limit above body 2's support plane; body 2's within the
+  // limit below body 1's.
+  auto height1 = [&](const Vec3& x) { return n.dot(x - closest.p2_W); };
+  auto height2 = [&](const Vec3& x) { return n.dot(closest.p1_W - x); };
+  const std::vector<Vec3> face1 =
+      contact_feature(a, closest.feature1, -n, closest.p1_W, height1, limit, unbounded1);
+  const std::vector<Vec3> face2 =
+      contact_feature(b, closest.feature2, n, closest.p2_W, height2, limit, unbounded2);
+  // Projection onto body 2's support plane, coordinates along (t1, t2) with t1 x t2 = n.
+  const Vec3 t1 = n.unitOrthogonal();
+  const Vec3 t2 = n.cross(t1);
+  const Vec3& origin = closest.p2_W;
+  const double scale =
+      std::max({1e-300, (closest.p1_W - a.x_W).norm(), (closest.p2_W - b.x_W).norm()});
+  const double tol = 1e-12 * scale;
+  auto project = [&](const std::vector<Vec3>& pts) {
+    std::vector<Vec2> out;
+    for (const Vec3& p : pts) out.emplace_back(t1.dot(p - origin), t2.dot(p - origin));
+    return tidy(out, tol);
+  };
+  std::vector<Vec2> patch;
+  if (unbounded1) {
+    patch = project(face2);
+  } else if (unbounded2) {
+    patch = project(face1);
+  } else {
+    patch = tidy(intersect(project(face1), project(face2)), tol);
+  }
+  std::vector<Vec3> out;
+  if (patch.empty()) {
+    out.push_back(closest.p2_W);
+    return out;
+  }
+  for (const Vec2& p : patch) out.push_back(origin + p.x() * t1 + p.y() * t2);
+  return out;
+}
+
+}  // namespace palpable

@@ -1,0 +1,117 @@
+#pragma once
+// Closest features between two posed shapes (DESIGN.md §3): V-Clip for polyhedron pairs, the
+// same V-Clip states with a one-point "polyhedron" for a sphere's centre against a polyhedron,
+// closed forms for sphere-sphere and halfspace-sphere, a support-vertex walk for
+// halfspace-polyhedron, and compounds piece by piece (minimum over pieces).
+//
+// Sign convention (used everywhere): the pair is (body 1, body 2) and n_W points from body 2 to
+// body 1; p1_W - p2_W = distance * n_W when separated.
+//
+// Penetration is detected, never returned as a distance: the status says kPenetrating and
+// `distance` is 0. Depth and a recovery direction come from libccd's MPR in
+// distance/crosscheck/mpr.hpp (a separate library, palpable_distance_crosscheck, that the
+// simulator may link optionally), except for spheres and halfspaces where `penetration_depth`
+// is exact.
+//
+// The query allocates nothing once the pair's cache has been used (compound pairs size their
+// cache on first use).
+#include "core/settings.hpp"
+#include "core/shape.hpp"
+#include "core/types.hpp"
+#include "distance/feature_mesh.hpp"
+#include "distance/vclip.hpp"
+
+#include <memory>
+#include <vector>
+
+namespace palpable {
+
+// Where a shape is: its modelling frame M in the world.
+struct Pose {
+  Vec3 x_W = Vec3::Zero();
+  Quat q_WM = Quat::Identity();
+};
+
+// A shape with its precomputed Voronoi structure, built once per shape (shapes are immutable)
+// and shared by every body and query using it.
+class ShapeGeometry {
+ public:
+  enum class PieceKind : std::uint8_t { kSphere, kPolyhedron, kHalfspace };
+  // One convex piece, posed in the shape's frame M (identity for a non-compound shape).
+  struct Piece {
+    PieceKind kind = PieceKind::kSphere;
+    const FeatureMesh* mesh = nullptr;  // the polyhedron, or a single point for a sphere
+    double radius = 0.0;                // sphere radius [m], 0 otherwise
+    Vec3 normal_M = Vec3::UnitZ();      // halfspace {x : normal . x <= offset}, in M
+    double offset = 0.0;
+    Vec3 p_M = Vec3::Zero();  // piece frame in M
+    Mat3 R_M = Mat3::Identity();
+    double max_radius = 0.0;  // about the piece frame origin [m]; +inf for a halfspace
+  };
+
+  explicit ShapeGeometry(std::shared_ptr<const Shape> shape);
+  ShapeGeometry(const ShapeGeometry&) = delete;
+  ShapeGeometry& operator=(const ShapeGeometry&) = delete;
+
+  const Shape& shape() const { return *shape_; }
+  const std::vector<Piece>& pieces() const { return pieces_; }
+  // The largest distance from the origin of M that rotation about it can move a surface point
+  // through [m]: 0 for a sphere centred at the origin (its surface maps onto itself), the maximum
+  // radius otherwise; +inf with a halfspace piece.
+  double rotation_radius() const { return rotation_radius_; }
+  // The largest distance from the origin of M to any point of the shape [m] (+inf: halfspace).
+  double reach() const { return reach_; }
+
+ private:
+  void add_piece(const Shape& shape, const Vec3& p_M, const Mat3& R_M);
+
+  std::shared_ptr<const Shape> shape_;
+  std::vector<std::unique_ptr<FeatureMesh>> meshes_;
+  std::vector<Piece> pieces_;
+  double rotation_radius_ = 0.0;
+  double reach_ = 0.0;
+};
+
+// The per-pair cache (owned by the caller, one per body pair): the feature pair of each piece
+// pair, and for halfspace pairs the support vertex.
+struct PairCache {
+  FeaturePair single;               // non-compound pairs
+  std::vector<FeaturePair> pieces;  // compound pairs: [piece1 * num_pieces2 + piece2]
+};
+
+struct DistanceResult {
+  ContactStatus status = ContactStatus::kFailed;
+  double distance = 0.0;           // [m] > 0 separated; 0 touching or penetrating
+  double penetration_depth = 0.0;  // [m] exact for sphere/halfspace pairs; NaN where unknown
+  Vec3 p1_W = Vec3::Zero();        // closest point on body 1
+  Vec3 p2_W = Vec3::Zero();        // closest point on body 2
+  Vec3 n_W = Vec3::UnitZ();        // unit, from body 2 to body 1
+  Feature feature1;                // closest feature on body 1's piece (vertex 0 of a sphere)
+  Feature feature2;
+  int piece1 = 0;  // which piece of a compound
+  int piece2 = 0;
+  int steps = 0;  // feature steps taken (all piece pairs)
+};
+
+// `max_steps` bounds each V-Clip walk (Settings::distance_max_steps; status kFailed beyond it).
+DistanceResult closest_features(const ShapeGeometry& g1, const Pose& pose1, const ShapeGeometry& g2,
+                                const Pose& pose2, PairCache& cache, int max_steps);
+inline DistanceResult closest_features(const ShapeGeometry& g1, const Pose& pose1,
+                                       const ShapeGeometry& g2, const Pose& pose2, PairCache& cache,
+                                       const Settings& settings) {
+  return closest_features(g1, pose1, g2, pose2, cache, settings.distance_max_steps);
+}
+
+// The contact patch (DESIGN.md §4, "The contact point"): where the closest features are parallel
+// within the envelope, the convex polygon or segment shared by the two bodies' contact features,
+// in projection along n. Each body's contact feature is the face at its closest feature most
+// opposed to the other body if all its vertices lie within distance + `envelope_m` of the other
+// body's support plane, else such an edge, else the closest point (a halfspace has no boundary).
+// The two are intersected in body 2's support plane (through p2_W, normal n_W); polygons come
+// counter-clockwise about n_W. One point when the contact is at a vertex; empty unless the status
+// is separated or touching. Allocates (called once per collision, not per check).
+std::vector<Vec3> contact_patch(const ShapeGeometry& g1, const Pose& pose1, const ShapeGeometry& g2,
+                                const Pose& pose2, const DistanceResult& closest,
+                                double envelope_m);
+
+}  // namespace palpable

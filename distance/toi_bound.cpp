@@ -1,0 +1,195 @@
+#include "distance/toi_bound.hpp"
+
+#include "core/ballistic.hpp"
+
+#include <cmath>
+
+namespace palpable {
+
+double rotational_term(const ToiMotion& motion, const Vec3& d_hat) {
+  if (motion.kinematic) {
+    const double s = motion.spin_W.cross(d_hat).norm();
+    if (s == 0.0 || motion.rotation_radius == 0.0) return 0.0;
+    return s * motion.rotation_radius;
+  }
+  if (motion.omega_bound == 0.0 || motion.rotation_radius == 0.0) return 0.0;
+  return motion.omega_bound * motion.rotation_radius;
+}
+
+double solve_gap_closing(double a, double b, double delta) {
+  if (!(delta > 0.0)) return 0.0;
+  const double disc = b * b + 2.0 * a * delta;
+  if (disc < 0.0) return kInfinity;
+  if (b > 0.0) return 2.0 * delta / (b + std::sqrt(disc));
+  if (a > 0.0) return (-b + std::sqrt(disc)) / a;
+  return kInfinity;
+}
+
+ToiBound toi_bound(const ToiMotion& motion1, const ToiMotion& motion2,
+                   const DistanceResult& closest, double d_target, const Settings& settings) {
+  ToiBound bound;
+  if (closest.status != ContactStatus::kSeparated && closest.status != ContactStatus::kTouching) {
+    bound.dt = 0.0;
+    return bound;
+  }
+  const Vec3 d_hat = -closest.n_W;
+  bound.closing_speed = (motion1.v_W - motion2.v_W).dot(d_hat) + rotational_term(motion1, d_hat) +
+                        rotational_term(motion2, d_hat);
+  bound.closing_accel = (motion1.a_W - motion2.a_W).dot(d_hat);
+  const double delta = closest.distance - d_target;
+  bound.dt = solve_gap_closing(bound.closing_accel, bound.closing_speed, delta);
+  if (bound.dt < settings.toi_min_progress_s) {
+    bound.dt = settings.toi_min_progress_s;
+    bound.floored = true;
+  }
+  return bound;
+}
+
+ToiBound exact_toi_sphere_sphere(const Vec3& c1_W, const Vec3& v1_W, double r1, const Vec3& c2_W,
+                                 const Vec3& v2_W, double r2, double d_target) {
+  ToiBound bound;
+  bound.exact = true;
+  const Vec3 r = c1_W - c2_W;
+  const Vec3 w = v1_W - v2_W;
+  const double reach = r1 + r2 + d_target;
+  // |r + w t|^2 = reach^2:  A t^2 + 2 B t + C = 0.
+  const double A = w.squaredNorm();
+  const double B = r.dot(w);
+  const double C = r.squaredNorm() - reach * reach;
+  bound.closing_speed = r.norm() > 0.0 ? -B / r.norm() : 0.0;
+  if (C <= 0.0) {
+    // Already within the target gap: now if approaching, never again if receding.
+    bound.dt = B < 0.0 ? 0.0 : kInfinity;
+    return bound;
+  }
+  if (B >= 0.0 || A == 0.0) return bound;  // receding or at rest relative to each other
+  const double disc = B * B - A * C;
+  if (disc < 0.0) return bound;  // passes by
+  // Smaller root without cancellation: t = C / (-B + sqrt(B^2 - A C)).
+  bound.dt = C / (-B + std::sqrt(disc));
+  return bound;
+}
+
+ToiBound exact_toi_sphere_plane(const Vec3& c_W, const Vec3& v_W, const Vec3& g_W, double radius,
+                                const Vec3& n_W, double offset_W, const Vec3& plane_velocity_W,
+                                double d_target) {
+  ToiBound bound;
+  bound.exact = true;
+  // Gap h(t) = delta - b t - 1/2 a t^2 exactly, with b = -(v - u) . n and a = -g . n.
+  const double delta = n_W.dot(c_W) - offset_W - radius - d_target;
+  bound.closing_speed = -(v_W - plane_velocity_W).dot(n_W);
+  bound.closing_accel = -g_W.dot(n_W);
+  const double a = bound.closing_accel;
+  const double b = bound.closing_speed;
+  if (delta <= 0.0 && b < 0.0 && a > 0.0) {
+    // Inside the target gap and receding (the flight after a microcollision): the time the
+    // parabola comes back down to the target gap, or, if it never rises above it, back to the
+    // present gap (t = -2b/a).
+    const double disc = b * b + 2.0 * a * delta;
+    bound.dt = disc >= 0.0 ? (-b + std::sqrt(disc)) / a : -2.0 * b / a;
+    return bound;
+  }
+  bound.dt = solve_gap_closing(a, b, delta);
+  return bound;
+}
+
+ToiMotion toi_motion(const Body& body, const BodyState& state, const ShapeGeometry& geometry,
+                     const Vec3& gravity_W, const Vec3& other_center_W, double other_reach_m,
+                     const Settings& settings) {
+  ToiMotion m;
+  switch (body.motion) {
+    case MotionKind::kFixed: return m;
+    case MotionKind::kDynamic:
+      m.v_W = state.v_W;
+      m.a_W = gravity_W;
+      m.rotation_radius = geometry.rotation_radius();
+      m.omega_bound = m.rotation_radius > 0.0 ? angular_speed_bound(body, state, settings) : 0.0;
+      return m;
+    case MotionKind::kKinematic: {
+      const KinematicMotion& k = body.kinematic;
+      m.kinematic = true;
+      m.v_W = k.velocity_W;
+      m.spin_W = k.angular_velocity_W;
+      const double spin = m.spin_W.norm();
+      if (spin == 0.0) return m;
+      const Vec3 axis = m.spin_W / spin;
+      const Vec3 axis_point = k.point_W + k.velocity_W * state.t;
+      auto from_axis = [&](const Vec3& x) {
+        const Vec3 r = x - axis_point;
+        return (r - r.dot(axis) * axis).norm();
+      };
+      const bool unbounded = !std::isfinite(geometry.reach());
+      m.rotation_radius = unbounded ? from_axis(other_center_W) + other_reach_m
+                                    : from_axis(state.x_W) + geometry.rotation_radius();
+      return m;
+    }
+  }
+  return m;
+}
+
+namespace {
+
+// The single sphere of a geometry centred at its origin, or nullptr.
+const ShapeGeometry::Piece* centred_sphere(const ShapeGeometry& g) {
+  if (g.pieces().size() != 1) return nullptr;
+  const ShapeGeometry::Piece& p = g.pieces()[0];
+  return p.kind == ShapeGeometry::PieceKind::kSphere && p.p_M.norm() == 0.0 ? &p : nullptr;
+}
+
+const ShapeGeometry::Piece* halfspace(const ShapeGeometry& g) {
+  if (g.pieces().size() != 1) return nullptr;
+  const ShapeGeometry::Piece& p = g.pieces()[0];
+  return p.kind == ShapeGeometry::PieceKind::kHalfspace ? &p : nullptr;
+}
+
+// Sphere (dynamic) against a halfspace whose motion maps its plane onto itself.
+bool exact_sphere_plane(const Body& sphere_body, const BodyState& s, double radius,
+                        const Body& plane_body, const BodyState& p,
+                        const ShapeGeometry::Piece& half, const Vec3& gravity_W, double d_target,
+                        ToiBound& out) {
+  if (!sphere_body.is_dynamic() || plane_body.is_dynamic()) return false;
+  const Vec3 n_W = p.q_WM * half.normal_M;
+  Vec3 plane_velocity = Vec3::Zero();
+  if (plane_body.motion == MotionKind::kKinematic) {
+    if (plane_body.kinematic.angular_velocity_W.cross(n_W).squaredNorm() != 0.0) return false;
+    plane_velocity = plane_body.kinematic.velocity_W;
+  }
+  const double offset_W = half.offset + n_W.dot(p.x_W);
+  out = exact_toi_sphere_plane(s.x_W, s.v_W, gravity_W, radius, n_W, offset_W, plane_velocity,
+                               d_target);
+  return true;
+}
+
+}  // namespace
+
+ToiBound time_of_impact(const Body& body1, const BodyState& state1, const ShapeGeometry& geometry1,
+                        const Body& body2, const BodyState& state2, const ShapeGeometry& geometry2,
+                        const DistanceResult& closest, const Vec3& gravity_W,
+                        const Settings& settings) {
+  const double d_target = 0.5 * settings.envelope_m;
+  const ShapeGeometry::Piece* sphere1 = centred_sphere(geometry1);
+  const ShapeGeometry::Piece* sphere2 = centred_sphere(geometry2);
+  ToiBound exact;
+  if (sphere1 && sphere2 && body1.is_dynamic() && body2.is_dynamic()) {
+    // Same gravity on both: the relative motion is linear.
+    return exact_toi_sphere_sphere(state1.x_W, state1.v_W, sphere1->radius, state2.x_W, state2.v_W,
+                                   sphere2->radius, d_target);
+  }
+  if (sphere1 && halfspace(geometry2) &&
+      exact_sphere_plane(body1, state1, sphere1->radius, body2, state2, *halfspace(geometry2),
+                         gravity_W, d_target, exact)) {
+    return exact;
+  }
+  if (sphere2 && halfspace(geometry1) &&
+      exact_sphere_plane(body2, state2, sphere2->radius, body1, state1, *halfspace(geometry1),
+                         gravity_W, d_target, exact)) {
+    return exact;
+  }
+  const ToiMotion m1 =
+      toi_motion(body1, state1, geometry1, gravity_W, state2.x_W, geometry2.reach(), settings);
+  const ToiMotion m2 =
+      toi_motion(body2, state2, geometry2, gravity_W, state1.x_W, geometry1.reach(), settings);
+  return toi_bound(m1, m2, closest, d_target, settings);
+}
+
+}  // namespace palpable

@@ -1,0 +1,103 @@
+#pragma once
+// Conservative time-of-impact bounds and exact times of impact (DESIGN.md §3).
+//
+// The slab argument: with d the current distance and d̂ the unit direction from body 1's closest
+// point to body 2's (d̂ = -n), the two bodies cannot touch before the slab between them, normal to
+// d̂, has closed. Each body's support along d̂ moves at most at its centre's velocity along d̂ plus
+// a rotational term, so the gap obeys d(t) >= d - b t - 1/2 a t^2 with
+//   b = (v1 - v2) . d̂ + rot1 + rot2   (closing speed)      a = (g1 - g2) . d̂   (closing accel.)
+// The bound aims at a target gap d_target inside the envelope (default envelope / 2), so an exact
+// bound lands at d ~ d_target rather than at d = 0 where the normal is ill-conditioned. With
+// Δ = d - d_target it solves 1/2 a t^2 + b t - Δ = 0 by branch:
+//   b > 0:           t = 2Δ / (b + sqrt(b^2 + 2 a Δ))      (no cancellation; valid for any a)
+//   b <= 0, a > 0:   t = (-b + sqrt(b^2 + 2 a Δ)) / a
+//   otherwise, or a negative discriminant: no contact within this ballistic phase (+inf).
+// (2Δ / (b + sqrt(...)) alone is wrong for b < 0: it cancels, is NaN at Δ = 0 and overshoots for
+// tiny Δ.)
+//
+// Rotational terms (an upper bound on the speed, along d̂, of a surface point relative to the
+// body's reference point, over the whole coming interval):
+//   dynamic sphere: 0 (its shape is invariant under rotation about its centre);
+//   dynamic polyhedron or compound: ω̄ ρ (ω̄ from DESIGN.md §2, ρ the maximum radius);
+//   fixed body: 0;
+//   kinematic body spinning at Ω about an axis: |Ω x d̂| r_axis, r_axis the largest distance from
+//   the axis of the relevant surface points — exactly 0 when Ω is parallel to d̂ (a platter or
+//   halfspace spinning about its own normal), tested before multiplying, so never 0 x inf.
+#include "core/body.hpp"
+#include "core/settings.hpp"
+#include "core/types.hpp"
+#include "distance/closest_features.hpp"
+
+namespace palpable {
+
+// How one body moves over the coming interval, as far as the bound needs it.
+struct ToiMotion {
+  Vec3 v_W = Vec3::Zero();  // velocity of the reference point (centre of mass, or the
+                            // kinematic axis point) [m/s]
+  Vec3 a_W = Vec3::Zero();  // its constant acceleration: gravity for a dynamic body, 0
+                            // for fixed and kinematic bodies [m/s^2]
+  // Dynamic body: the rotational term is omega_bound * rotation_radius (0 if either is 0).
+  // Kinematic body: |spin_W x d̂| * rotation_radius (0 if the cross product is 0).
+  bool kinematic = false;
+  double omega_bound = 0.0;      // ω̄ [rad/s] (dynamic)
+  Vec3 spin_W = Vec3::Zero();    // Ω [rad/s] (kinematic)
+  double rotation_radius = 0.0;  // ρ or r_axis [m]; may be +inf (halfspace)
+};
+
+// Upper bound on the speed along `d_hat` of the body's surface relative to its reference point.
+double rotational_term(const ToiMotion& motion, const Vec3& d_hat);
+
+struct ToiBound {
+  double dt = kInfinity;  // [s] from now: the gap stays >= d_target for at least this long
+  bool exact = false;     // dt is the exact time the gap reaches d_target (closed form): the
+                          // scheduler needs no recheck before it
+  bool floored = false;   // the conservative value was below settings.toi_min_progress_s and was
+                          // raised to it (count these)
+  double closing_speed = 0.0;  // b [m/s]
+  double closing_accel = 0.0;  // a [m/s^2]
+};
+
+// Smallest t >= 0 with 1/2 a t^2 + b t = delta (delta > 0), by the branches above; +inf if none.
+double solve_gap_closing(double a, double b, double delta);
+
+// The conservative bound from the closest-feature result (status separated or touching; any other
+// status gives dt = 0). d_target [m] < envelope.
+ToiBound toi_bound(const ToiMotion& motion1, const ToiMotion& motion2,
+                   const DistanceResult& closest, double d_target, const Settings& settings);
+
+// Exact time for two spheres to come within d_target of each other when their relative motion is
+// linear (both dynamic under the same gravity, or both unaccelerated): centres c1, c2, relative
+// velocity v1 - v2, radii r1, r2. The earliest root of |c1 - c2 + (v1 - v2) t| = r1 + r2 +
+// d_target.
+ToiBound exact_toi_sphere_sphere(const Vec3& c1_W, const Vec3& v1_W, double r1, const Vec3& c2_W,
+                                 const Vec3& v2_W, double r2, double d_target);
+
+// Exact time for a sphere (centre c, velocity v, acceleration g) to come within d_target of a
+// plane n . x = offset moving at velocity u_plane whose motion maps the plane onto itself (fixed,
+// or spinning about n): a parabola in the height.
+ToiBound exact_toi_sphere_plane(const Vec3& c_W, const Vec3& v_W, const Vec3& g_W, double radius,
+                                const Vec3& n_W, double offset_W, const Vec3& plane_velocity_W,
+                                double d_target);
+
+// The ToiMotion of a body in `state` (DESIGN.md §3): dynamic bodies move at v under gravity with
+// the rotational term ω̄ ρ (ω̄ = angular_speed_bound, ρ = ShapeGeometry::rotation_radius(), 0 for
+// a sphere about its centre); fixed bodies do not move; kinematic bodies translate at their axis
+// velocity and spin at Ω, with r_axis the distance from the axis to the body's centre plus ρ —
+// or, for a halfspace, the distance from the axis to the other body's centre plus that body's
+// reach `other_reach_m` (the part of the plane the other body can touch; valid while the other
+// body stays within that reach of where it is now).
+ToiMotion toi_motion(const Body& body, const BodyState& state, const ShapeGeometry& geometry,
+                     const Vec3& gravity_W, const Vec3& other_center_W, double other_reach_m,
+                     const Settings& settings);
+
+// The time-of-impact bound of a pair of bodies in the given states (at the same time), from their
+// closest-feature result, aimed at d_target = envelope / 2. Exact where a closed form exists (two
+// dynamic spheres; a dynamic sphere against a fixed halfspace or a kinematic halfspace whose
+// rotation is about its own normal), conservative otherwise (floored and counted by
+// settings.toi_min_progress_s).
+ToiBound time_of_impact(const Body& body1, const BodyState& state1, const ShapeGeometry& geometry1,
+                        const Body& body2, const BodyState& state2, const ShapeGeometry& geometry2,
+                        const DistanceResult& closest, const Vec3& gravity_W,
+                        const Settings& settings);
+
+}  // namespace palpable
