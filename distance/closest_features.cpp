@@ -153,8 +153,15 @@ DistanceResult piece_pair(const PosedPiece& a, const PosedPiece& b, FeaturePair&
   // Convex cores (a polyhedron or a sphere's centre) by V-Clip in a's frame, then the radii.
   const Mat3 R_AB = a.R_W.transpose() * b.R_W;
   const Vec3 t_AB = a.R_W.transpose() * (b.x_W - a.x_W);
+  int seed_steps = 0;
+  if (!cache.a.valid() || !cache.b.valid()) {
+    // Cold start: begin at each polyhedron's vertex furthest toward the other's centre (a
+    // downhill walk over the vertex graph) instead of at vertex 0; the walk's steps are counted.
+    cache.a = Feature::vertex(support_walk(*a.piece->mesh, -t_AB, 0, seed_steps));
+    cache.b = Feature::vertex(support_walk(*b.piece->mesh, R_AB.transpose() * t_AB, 0, seed_steps));
+  }
   const VClipResult v = vclip(*a.piece->mesh, *b.piece->mesh, R_AB, t_AB, cache, max_steps);
-  r.steps = v.steps;
+  r.steps = v.steps + seed_steps;
   r.feature1 = v.features.a;
   r.feature2 = v.features.b;
   r.n_W = a.R_W * v.n_A;
@@ -236,10 +243,15 @@ DistanceResult closest_features(const ShapeGeometry& g1, const Pose& pose1, cons
 
 namespace {
 
-// Points of the face of `piece` incident to `feature` whose outward normal is most aligned with
-// `outward_W`, in world; empty for a halfspace (unbounded), one point for a sphere.
-std::vector<Vec3> contact_face(const PosedPiece& p, Feature feature, const Vec3& outward_W,
-                               const Vec3& closest_W, bool& unbounded) {
+// The contact feature of a posed piece as world points (DESIGN.md §4, "The contact point"): the
+// face incident to the closest feature that is most aligned with `outward_W`, if all its
+// vertices lie within `limit` of the other body's support plane (height(x) <= limit); else the
+// incident edge with both ends within it; else the closest point alone. A halfspace is unbounded
+// (no points, `unbounded` set); a sphere gives its closest point.
+template <typename Height>
+std::vector<Vec3> contact_feature(const PosedPiece& p, Feature feature, const Vec3& outward_W,
+                                  const Vec3& closest_W, Height&& height, double limit,
+                                  bool& unbounded) {
   unbounded = false;
   std::vector<Vec3> points;
   if (p.piece->kind == PieceKind::kHalfspace) {
@@ -251,9 +263,11 @@ std::vector<Vec3> contact_face(const PosedPiece& p, Feature feature, const Vec3&
     return points;
   }
   const FeatureMesh& m = *p.piece->mesh;
+  auto world = [&](const Vec3& v_M) { return Vec3(p.x_W + p.R_W * v_M); };
   const Vec3 outward_M = p.R_W.transpose() * outward_W;
   int best_face = -1;
   double best_cos = -kInfinity;
+  std::vector<int> edges;  // half-edges incident to the feature
   auto consider = [&](int f) {
     const double c = m.face_normal(f).dot(outward_M);
     if (c > best_cos) {
@@ -266,36 +280,37 @@ std::vector<Vec3> contact_face(const PosedPiece& p, Feature feature, const Vec3&
   } else if (feature.kind == FeatureKind::kEdge) {
     consider(m.face_of(feature.index));
     consider(m.face_of(m.twin(feature.index)));
+    edges.push_back(feature.index);
   } else {
     for (const VoronoiPlane* q = m.vertex_planes_begin(feature.index);
          q != m.vertex_planes_end(feature.index); ++q) {
       consider(m.face_of(q->neighbor.index));
+      edges.push_back(q->neighbor.index);
     }
   }
   const int h0 = m.face_half_edge(best_face);
   int h = h0;
+  bool face_within = true;
   do {
-    points.push_back(p.x_W + p.R_W * m.tail(h));
+    points.push_back(world(m.tail(h)));
+    face_within = face_within && height(points.back()) <= limit;
+    if (feature.kind == FeatureKind::kFace) edges.push_back(h);
     h = m.next(h);
   } while (h != h0);
-  return points;
-}
-
-// Keeps the part of the convex polygon where height(x) = n . x - c <= limit (one
-// Sutherland-Hodgman pass).
-std::vector<Vec3> clip_below(const std::vector<Vec3>& poly, const Vec3& n, double c, double limit) {
-  if (poly.size() <= 1) return poly;
-  std::vector<Vec3> out;
-  for (std::size_t i = 0; i < poly.size(); ++i) {
-    const Vec3& p = poly[i];
-    const Vec3& q = poly[(i + 1) % poly.size()];
-    const double hp = n.dot(p) - c - limit;
-    const double hq = n.dot(q) - c - limit;
-    if (hp <= 0.0) out.push_back(p);
-    if ((hp < 0.0 && hq > 0.0) || (hp > 0.0 && hq < 0.0))
-      out.push_back(p + (hp / (hp - hq)) * (q - p));
+  if (face_within) return points;
+  points.clear();
+  double best_height = kInfinity;
+  for (int e : edges) {
+    const Vec3 a = world(m.tail(e));
+    const Vec3 b = world(m.head(e));
+    const double worst = std::max(height(a), height(b));
+    if (worst <= limit && worst < best_height) {
+      best_height = worst;
+      points = {a, b};
+    }
   }
-  return out;
+  if (points.empty()) points.push_back(closest_W);
+  return points;
 }
 
 using Vec2 = Eigen::Vector2d;
@@ -381,12 +396,14 @@ std::vector<Vec3> contact_patch(const ShapeGeometry& g1, const Pose& pose1, cons
   const Vec3& n = closest.n_W;
   const double limit = closest.distance + envelope_m;
   bool unbounded1 = false, unbounded2 = false;
-  // Body 1's face, kept where it is within the limit above body 2's support plane; body 2's
-  // face, kept where it is within the limit below body 1's.
-  std::vector<Vec3> face1 = contact_face(a, closest.feature1, -n, closest.p1_W, unbounded1);
-  std::vector<Vec3> face2 = contact_face(b, closest.feature2, n, closest.p2_W, unbounded2);
-  face1 = clip_below(face1, n, n.dot(closest.p2_W), limit);
-  face2 = clip_below(face2, -n, -n.dot(closest.p1_W), limit);
+  // Body 1's contact feature within the limit above body 2's support plane; body 2's within the
+  // limit below body 1's.
+  auto height1 = [&](const Vec3& x) { return n.dot(x - closest.p2_W); };
+  auto height2 = [&](const Vec3& x) { return n.dot(closest.p1_W - x); };
+  const std::vector<Vec3> face1 =
+      contact_feature(a, closest.feature1, -n, closest.p1_W, height1, limit, unbounded1);
+  const std::vector<Vec3> face2 =
+      contact_feature(b, closest.feature2, n, closest.p2_W, height2, limit, unbounded2);
   // Projection onto body 2's support plane, coordinates along (t1, t2) with t1 x t2 = n.
   const Vec3 t1 = n.unitOrthogonal();
   const Vec3 t2 = n.cross(t1);

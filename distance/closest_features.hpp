@@ -15,6 +15,7 @@
 //
 // The query allocates nothing once the pair's cache has been used (compound pairs size their
 // cache on first use).
+#include "core/settings.hpp"
 #include "core/shape.hpp"
 #include "core/types.hpp"
 #include "distance/feature_mesh.hpp"
@@ -92,18 +93,23 @@ struct DistanceResult {
   int steps = 0;  // feature steps taken (all piece pairs)
 };
 
+// `max_steps` bounds each V-Clip walk (Settings::distance_max_steps; status kFailed beyond it).
 DistanceResult closest_features(const ShapeGeometry& g1, const Pose& pose1, const ShapeGeometry& g2,
                                 const Pose& pose2, PairCache& cache, int max_steps);
+inline DistanceResult closest_features(const ShapeGeometry& g1, const Pose& pose1,
+                                       const ShapeGeometry& g2, const Pose& pose2, PairCache& cache,
+                                       const Settings& settings) {
+  return closest_features(g1, pose1, g2, pose2, cache, settings.distance_max_steps);
+}
 
-// The contact patch (DESIGN.md §4, "The contact point"): when the closest features are parallel
-// within `envelope_m`, the convex polygon (or segment) where the two bodies' surfaces lie within
-// the envelope of each other: body 1's contact face (the face at its closest feature most
-// opposed to n) clipped to within distance + `envelope_m` of body 2's support plane, intersected
-// (in projection along n) with body 2's contact face clipped likewise. A halfspace contributes
-// no boundary. Points lie on body 2's support
-// plane (through p2_W, normal n_W), counter-clockwise about n_W. One point when the contact is a
-// vertex or the features are not parallel; empty unless the status is separated or touching.
-// Allocates (called once per collision, not per check).
+// The contact patch (DESIGN.md §4, "The contact point"): where the closest features are parallel
+// within the envelope, the convex polygon or segment shared by the two bodies' contact features,
+// in projection along n. Each body's contact feature is the face at its closest feature most
+// opposed to the other body if all its vertices lie within distance + `envelope_m` of the other
+// body's support plane, else such an edge, else the closest point (a halfspace has no boundary).
+// The two are intersected in body 2's support plane (through p2_W, normal n_W); polygons come
+// counter-clockwise about n_W. One point when the contact is at a vertex; empty unless the status
+// is separated or touching. Allocates (called once per collision, not per check).
 std::vector<Vec3> contact_patch(const ShapeGeometry& g1, const Pose& pose1, const ShapeGeometry& g2,
                                 const Pose& pose2, const DistanceResult& closest,
                                 double envelope_m);

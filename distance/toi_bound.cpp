@@ -172,8 +172,8 @@ ToiBound time_of_impact(const Body& body1, const BodyState& state1, const ShapeG
   ToiBound exact;
   if (sphere1 && sphere2 && body1.is_dynamic() && body2.is_dynamic()) {
     // Same gravity on both: the relative motion is linear.
-    return exact_toi_sphere_sphere(state1.x_W, state1.v_W, sphere1->radius, state2.x_W,
-                                   state2.v_W, sphere2->radius, d_target);
+    return exact_toi_sphere_sphere(state1.x_W, state1.v_W, sphere1->radius, state2.x_W, state2.v_W,
+                                   sphere2->radius, d_target);
   }
   if (sphere1 && halfspace(geometry2) &&
       exact_sphere_plane(body1, state1, sphere1->radius, body2, state2, *halfspace(geometry2),
@@ -185,10 +185,10 @@ ToiBound time_of_impact(const Body& body1, const BodyState& state1, const ShapeG
                          gravity_W, d_target, exact)) {
     return exact;
   }
-  const ToiMotion m1 = toi_motion(body1, state1, geometry1, gravity_W, state2.x_W,
-                                  geometry2.reach(), settings);
-  const ToiMotion m2 = toi_motion(body2, state2, geometry2, gravity_W, state1.x_W,
-                                  geometry1.reach(), settings);
+  const ToiMotion m1 =
+      toi_motion(body1, state1, geometry1, gravity_W, state2.x_W, geometry2.reach(), settings);
+  const ToiMotion m2 =
+      toi_motion(body2, state2, geometry2, gravity_W, state1.x_W, geometry1.reach(), settings);
   return toi_bound(m1, m2, closest, d_target, settings);
 }
 

@@ -97,4 +97,20 @@ MprPenetration mpr_penetration(const MprShape& shape1, const MprShape& shape2,
   return result;
 }
 
+PenetrationRecovery recover_penetration(const ShapeGeometry& g1, const Pose& pose1,
+                                        const ShapeGeometry& g2, const Pose& pose2,
+                                        const DistanceResult& closest,
+                                        const MprSettings& settings) {
+  const MprShape s1(g1, pose1, closest.piece1);
+  const MprShape s2(g2, pose2, closest.piece2);
+  const MprPenetration p = mpr_penetration(s1, s2, settings);
+  PenetrationRecovery r;
+  r.intersecting = p.intersecting;
+  r.depth = p.depth;
+  // libccd moves body 2 by depth * direction to separate: the normal from 2 to 1 is opposite.
+  r.normal_W = -p.direction_W;
+  r.position_W = p.position_W;
+  return r;
+}
+
 }  // namespace palpable

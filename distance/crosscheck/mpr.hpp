@@ -51,4 +51,19 @@ bool mpr_intersect(const MprShape& shape1, const MprShape& shape2,
 MprPenetration mpr_penetration(const MprShape& shape1, const MprShape& shape2,
                                const MprSettings& settings = {});
 
+// Recovery from a penetration detected by closest_features (status kPenetrating): MPR on the
+// piece pair the result names. `normal_W` follows DESIGN.md §3 (from body 2 to body 1): moving
+// body 1 by depth along it (or body 2 against it) separates the pieces along MPR's portal
+// direction, which is not necessarily the minimum translation.
+struct PenetrationRecovery {
+  bool intersecting = false;
+  double depth = 0.0;              // [m]
+  Vec3 normal_W = Vec3::Zero();    // unit, from body 2 to body 1
+  Vec3 position_W = Vec3::Zero();  // a point in the overlap
+};
+PenetrationRecovery recover_penetration(const ShapeGeometry& g1, const Pose& pose1,
+                                        const ShapeGeometry& g2, const Pose& pose2,
+                                        const DistanceResult& closest,
+                                        const MprSettings& settings = {});
+
 }  // namespace palpable

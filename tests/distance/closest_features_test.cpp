@@ -8,7 +8,10 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <cstdio>
+#include <cstdlib>
+#include <new>
 
 using namespace palpable;
 using namespace palpable::test;
@@ -137,4 +140,244 @@ TEST_CASE("closest features agree with brute force and MPR on 100,000 random pos
   CHECK(stats.point_errors == 0);
   CHECK(stats.mpr_disagreements == 0);
   CHECK(stats.max_relative_error <= 1e-10);
+}
+
+namespace {
+
+double polygon_area(const std::vector<Vec3>& pts, const Vec3& n) {
+  double area = 0.0;
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    area += pts[i].cross(pts[(i + 1) % pts.size()]).dot(n);
+  }
+  return 0.5 * area;
+}
+
+}  // namespace
+
+TEST_CASE("sign convention: a ball dropped on the ground, pair given in either order",
+          "[distance][sign]") {
+  const TestShape ball_shape = ball();  // radius 0.4
+  const TestShape ground = make_test_shape("ground", Halfspace{Vec3::UnitZ(), 0.0});
+  const TestShape slab = make_test_shape("slab", ConvexPolyhedron::box(Vec3(5.0, 5.0, 0.5)));
+  const Vec3 g(0.0, 0.0, -9.81);
+  for (const TestShape* floor : {&ground, &slab}) {
+    const Pose floor_pose{floor == &slab ? Vec3(0, 0, -0.5) : Vec3::Zero(), Quat::Identity()};
+    for (double t : {0.0, 0.2, 0.3}) {
+      // Dropped from rest at height 1: centre z(t) = 1 - g t^2 / 2, velocity -g t.
+      const Pose ball_pose{Vec3(0.1, -0.2, 1.0 - 0.5 * 9.81 * t * t), Quat::Identity()};
+      const Vec3 v_ball = g * t;
+      const double expected = ball_pose.x_W.z() - 0.4;
+      PairCache c1, c2;
+      const DistanceResult ab =
+          closest_features(*ball_shape.geometry, ball_pose, *floor->geometry, floor_pose, c1, 100);
+      const DistanceResult ba =
+          closest_features(*floor->geometry, floor_pose, *ball_shape.geometry, ball_pose, c2, 100);
+      CAPTURE(floor->name, t);
+      REQUIRE(ab.status == ContactStatus::kSeparated);
+      REQUIRE(ba.status == ContactStatus::kSeparated);
+      CHECK(ab.distance == Approx(expected).epsilon(1e-14));
+      CHECK(ba.distance == Approx(expected).epsilon(1e-14));
+      // n points from body 2 to body 1.
+      CHECK((ab.n_W - Vec3::UnitZ()).norm() < 1e-14);
+      CHECK((ba.n_W + Vec3::UnitZ()).norm() < 1e-14);
+      CHECK((ab.p1_W - (ball_pose.x_W - 0.4 * Vec3::UnitZ())).norm() < 1e-14);
+      CHECK(std::abs(ab.p2_W.z()) < 1e-14);
+      CHECK((ab.p1_W - ab.p2_W - ab.distance * ab.n_W).norm() < 1e-14);
+      CHECK((ba.p1_W - ba.p2_W - ba.distance * ba.n_W).norm() < 1e-14);
+      // u = u1 - u2, u_n = u . n < 0 means approaching, in both orders once it falls.
+      const double un_ab = (v_ball - Vec3::Zero()).dot(ab.n_W);
+      const double un_ba = (Vec3::Zero() - v_ball).dot(ba.n_W);
+      CHECK(un_ab == Approx(un_ba));
+      if (t > 0.0) CHECK(un_ab < 0.0);
+    }
+  }
+}
+
+TEST_CASE("spheres and halfspaces: closed forms, touching, penetration depth",
+          "[distance][shapes]") {
+  const TestShape a = make_test_shape("a", Sphere{0.5});
+  const TestShape b = make_test_shape("b", Sphere{0.25});
+  PairCache cache;
+  const Pose pa{Vec3(0, 0, 0), Quat::Identity()};
+  auto query = [&](const Vec3& x) {
+    return closest_features(*a.geometry, pa, *b.geometry, Pose{x, Quat::Identity()}, cache, 100);
+  };
+  DistanceResult r = query(Vec3(1.0, 0.0, 0.0));
+  CHECK(r.status == ContactStatus::kSeparated);
+  CHECK(r.distance == Approx(0.25));
+  CHECK((r.n_W - Vec3(-1, 0, 0)).norm() < 1e-15);
+  r = query(Vec3(0.0, 0.75, 0.0));
+  CHECK(r.status == ContactStatus::kTouching);
+  r = query(Vec3(0.0, 0.0, 0.6));
+  CHECK(r.status == ContactStatus::kPenetrating);
+  CHECK(r.distance == 0.0);
+  CHECK(r.penetration_depth == Approx(0.15));
+
+  // A tilted cube above the ground: the lowest vertex, found by a walk from the cached vertex.
+  const TestShape box = cube();
+  const TestShape ground = make_test_shape("ground", Halfspace{Vec3::UnitZ(), 0.0});
+  PairCache ground_cache;
+  int total_steps = 0;
+  for (int i = 0; i < 100; ++i) {
+    const Quat q(Eigen::AngleAxisd(0.01 * i, Vec3(1, 1, 0).normalized()));
+    const Pose pose{Vec3(0, 0, 2.0), q};
+    const DistanceResult g =
+        closest_features(*box.geometry, pose, *ground.geometry, Pose{}, ground_cache, 100);
+    double lowest = kInfinity;
+    for (const Vec3& v : std::get<ConvexPolyhedron>(*box.shape).vertices()) {
+      lowest = std::min(lowest, (pose.x_W + q * v).z());
+    }
+    CHECK(g.distance == Approx(lowest).epsilon(1e-14));
+    CHECK(g.n_W.z() == 1.0);
+    total_steps += g.steps;
+  }
+  CHECK(total_steps <= 10);  // coherent: the lowest vertex rarely changes
+  const DistanceResult sunk =
+      closest_features(*box.geometry, Pose{Vec3(0, 0, 0.3), Quat::Identity()}, *ground.geometry,
+                       Pose{}, ground_cache, 100);
+  CHECK(sunk.status == ContactStatus::kPenetrating);
+  CHECK(sunk.penetration_depth == Approx(0.2));
+}
+
+TEST_CASE("compounds pair piece by piece", "[distance][shapes]") {
+  // A dish of two boxes; a ball above the right one.
+  auto piece = [](const Vec3& half, const Vec3& at) {
+    return CompoundPart{std::make_shared<const Shape>(ConvexPolyhedron::box(half)), at,
+                        Quat::Identity()};
+  };
+  const TestShape dish =
+      make_test_shape("dish", make_compound({piece(Vec3(1, 1, 0.1), Vec3(-1, 0, 0)),
+                                             piece(Vec3(1, 1, 0.1), Vec3(1.5, 0, 0.3))}));
+  const TestShape ball_shape = ball();
+  PairCache cache;
+  const DistanceResult r =
+      closest_features(*ball_shape.geometry, Pose{Vec3(1.5, 0, 1.0), Quat::Identity()},
+                       *dish.geometry, Pose{}, cache, 100);
+  CHECK(r.status == ContactStatus::kSeparated);
+  CHECK(r.piece2 == 1);
+  CHECK(r.distance == Approx(1.0 - 0.4 - 0.4));
+  CHECK(cache.pieces.size() == 2);
+  const DistanceResult left =
+      closest_features(*ball_shape.geometry, Pose{Vec3(-1.0, 0, 0.8), Quat::Identity()},
+                       *dish.geometry, Pose{}, cache, 100);
+  CHECK(left.piece2 == 0);
+  CHECK(left.distance == Approx(0.8 - 0.1 - 0.4));
+}
+
+TEST_CASE("contact patch: face on face, edge on face, vertex on face", "[distance][patch]") {
+  const double envelope = 1e-3;
+  const TestShape box = cube();
+  const TestShape ground = make_test_shape("ground", Halfspace{Vec3::UnitZ(), 0.0});
+  PairCache cache;
+  SECTION("cube resting on a cube, offset sideways: the overlap rectangle") {
+    const Pose top{Vec3(0.3, -0.2, 1.0 + 0.4 * envelope), Quat::Identity()};
+    const Pose bottom{};
+    const DistanceResult r =
+        closest_features(*box.geometry, top, *box.geometry, bottom, cache, 100);
+    REQUIRE(r.status == ContactStatus::kSeparated);
+    const auto patch = contact_patch(*box.geometry, top, *box.geometry, bottom, r, envelope);
+    REQUIRE(patch.size() == 4);
+    CHECK(polygon_area(patch, Vec3::UnitZ()) == Approx(0.7 * 0.8));
+    for (const Vec3& p : patch) CHECK(std::abs(p.z() - 0.5) < 1e-12);
+  }
+  SECTION("cube on the ground, tilted within the envelope: the whole bottom face") {
+    const double tilt = 0.5 * envelope;  // the far edge rises by about tilt [m]
+    const Pose pose{Vec3(0, 0, 0.5 + 0.5 * tilt + 0.2 * envelope),
+                    Quat(Eigen::AngleAxisd(tilt, Vec3::UnitX()))};
+    const DistanceResult r =
+        closest_features(*box.geometry, pose, *ground.geometry, Pose{}, cache, 100);
+    REQUIRE(r.status == ContactStatus::kSeparated);
+    const auto patch = contact_patch(*box.geometry, pose, *ground.geometry, Pose{}, r, envelope);
+    REQUIRE(patch.size() == 4);
+    CHECK(polygon_area(patch, Vec3::UnitZ()) == Approx(1.0).epsilon(1e-5));
+  }
+  SECTION("cube on an edge: a segment") {
+    const Pose pose{Vec3(0, 0, std::sqrt(0.5) + 0.3 * envelope),
+                    Quat(Eigen::AngleAxisd(M_PI / 4, Vec3::UnitX()))};
+    const DistanceResult r =
+        closest_features(*box.geometry, pose, *ground.geometry, Pose{}, cache, 100);
+    const auto patch = contact_patch(*box.geometry, pose, *ground.geometry, Pose{}, r, envelope);
+    REQUIRE(patch.size() == 2);
+    CHECK((patch[0] - patch[1]).norm() == Approx(1.0));
+  }
+  SECTION("cube on a vertex: one point") {
+    const Quat q = Quat::FromTwoVectors(Vec3(-1, -1, -1).normalized(), -Vec3::UnitZ());
+    const Pose pose{Vec3(0, 0, std::sqrt(0.75) + 0.3 * envelope), q};
+    const DistanceResult r =
+        closest_features(*box.geometry, pose, *ground.geometry, Pose{}, cache, 100);
+    const auto patch = contact_patch(*box.geometry, pose, *ground.geometry, Pose{}, r, envelope);
+    REQUIRE(patch.size() >= 1);
+    for (const Vec3& p : patch) CHECK((p - r.p2_W).norm() < 2.0 * envelope);
+  }
+  SECTION("edge across a face of another cube: the part of the edge over the face") {
+    const Pose top{Vec3(0.3, 0.4, 0.5 + std::sqrt(0.5) + 0.3 * envelope),
+                   Quat(Eigen::AngleAxisd(M_PI / 4, Vec3::UnitY()))};
+    const DistanceResult r =
+        closest_features(*box.geometry, top, *box.geometry, Pose{}, cache, 100);
+    REQUIRE(r.status == ContactStatus::kSeparated);
+    const auto patch = contact_patch(*box.geometry, top, *box.geometry, Pose{}, r, envelope);
+    REQUIRE(patch.size() == 2);
+    CHECK((patch[0] - patch[1]).norm() == Approx(0.6).epsilon(1e-9));  // y from -0.1 to 0.5
+  }
+}
+
+namespace {
+// Counts heap allocations while `counting` is set (for the allocation-free hot path check).
+std::atomic<bool> counting{false};
+std::atomic<long> allocations{0};
+}  // namespace
+
+// Every replaceable (unaligned) form, so that allocation and release always pair malloc/free.
+void* operator new(std::size_t size) {
+  if (counting.load(std::memory_order_relaxed)) allocations.fetch_add(1);
+  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size) {
+  return operator new(size);
+}
+void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
+  if (counting.load(std::memory_order_relaxed)) allocations.fetch_add(1);
+  return std::malloc(size == 0 ? 1 : size);
+}
+void* operator new[](std::size_t size, const std::nothrow_t& tag) noexcept {
+  return operator new(size, tag);
+}
+void operator delete(void* p) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p) noexcept {
+  std::free(p);
+}
+void operator delete(void* p, std::size_t) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p, std::size_t) noexcept {
+  std::free(p);
+}
+void operator delete(void* p, const std::nothrow_t&) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p, const std::nothrow_t&) noexcept {
+  std::free(p);
+}
+
+TEST_CASE("coherent queries allocate nothing", "[distance][alloc]") {
+  const TestShape a = cube();
+  const TestShape b = hull1280();
+  const TestShape s = ball();
+  const TestShape ground = make_test_shape("ground", Halfspace{Vec3::UnitZ(), 0.0});
+  PairCache c1, c2, c3;
+  double sink = 0.0;
+  const Pose fixed{Vec3(0, 0, 0), Quat::Identity()};
+  counting = true;
+  for (int i = 0; i < 1000; ++i) {
+    const Pose p{Vec3(0.001 * i, 0.2, 1.8), Quat(Eigen::AngleAxisd(0.002 * i, Vec3::UnitY()))};
+    sink += closest_features(*a.geometry, p, *b.geometry, fixed, c1, 10000).distance;
+    sink += closest_features(*s.geometry, p, *a.geometry, fixed, c2, 10000).distance;
+    sink += closest_features(*a.geometry, p, *ground.geometry, fixed, c3, 10000).distance;
+  }
+  counting = false;
+  CHECK(sink > 0.0);
+  CHECK(allocations.load() == 0);
 }

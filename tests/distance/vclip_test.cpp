@@ -125,9 +125,9 @@ TEST_CASE("degenerate cube-cube configurations terminate correctly from every st
                          ContactStatus::kSeparated, 0.125));
   }
   {  // penetrating face-face: the configuration where Lin-Canny cycles
-    // Mirtich (1998, section 2) notes that Lin-Canny cycles forever on interpenetrating
-    // polyhedra: no feature pair satisfies its closest-feature conditions. Face-on-face overlap
-    // with coincident side faces is also exactly degenerate.
+    // Mirtich (1998, introduction and section 2) notes that Lin-Canny cycles forever on
+    // interpenetrating polyhedra: no feature pair satisfies its closest-feature conditions. The
+    // face-on-face overlap with coincident side faces is also exactly degenerate.
     add(check_all_starts(a, b, Mat3::Identity(), Vec3(0.0, 0.0, 0.9), ContactStatus::kPenetrating,
                          0.0));
     add(check_all_starts(a, b, Mat3::Identity(), Vec3(0.0, 0.0, 0.0), ContactStatus::kPenetrating,
