@@ -361,8 +361,12 @@ struct Simulation::Impl {
 
   bool approaching(const Contact& c) const {
     // u_n = 0 with gravity pressing the bodies together counts as approaching: a body left at
-    // rest in contact by an e = 0 collision must collide again (DESIGN.md §4).
-    return c.u_n < 0.0 || (c.g_n > 0.0 && c.u_n <= 1e-9 * c.v_micro);
+    // rest in contact by an e = 0 collision must collide again (DESIGN.md §4). Without it, an
+    // approach within rounding of the bodies' speeds (what an e = 0 collision leaves) is rest.
+    if (c.g_n > 0.0) return c.u_n <= 1e-9 * c.v_micro;
+    const double scale =
+        contact_point_velocity_W(c.body1).norm() + contact_point_velocity_W(c.body2).norm();
+    return c.u_n < -1e-12 * scale;
   }
 
   // Resolves the collision and applies it to both bodies; returns the record.
@@ -494,10 +498,12 @@ struct Simulation::Impl {
       ++sim.stats_.distance_failures;
       return t + floor;
     }
+    bool resting = false;  // within the envelope, neither approaching nor accelerated together
     if (dr.status == ContactStatus::kPenetrating || dr.distance <= settings().envelope_m) {
       Contact c = make_contact(p, s1, s2, dr, /*with_patch=*/false);
       if (approaching(c)) return t;
       if (dr.status == ContactStatus::kPenetrating) return t + floor;
+      resting = c.g_n == 0.0;
     }
     const Body& b1 = body(p.a);
     const Body& b2 = body(p.b);
@@ -506,8 +512,14 @@ struct Simulation::Impl {
                        sim.world_.gravity_W, settings());
     if (bound.floored) ++sim.stats_.floored_bounds;
     if (bound.exact) ++sim.stats_.exact_bounds;
+    if (bound.exact && resting && bound.dt < floor) {
+      // An exact time of impact of zero for a pair at rest in contact (an e = 0 collision without
+      // gravity leaves them so, up to rounding): their relative motion is linear, so the gap
+      // cannot close; only another collision (which re-bounds the pair) changes that.
+      return kInfinity;
+    }
     if (!(bound.dt >= 0.0)) return t + floor;  // NaN guard: never stall, never skip
-    return t + bound.dt;
+    return t + std::max(bound.dt, bound.exact ? 0.0 : floor);
   }
 
   DistanceResult query(PairRuntime& p, const BodyState& s1, const BodyState& s2) {

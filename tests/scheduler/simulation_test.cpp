@@ -181,7 +181,8 @@ std::string run_to_text(QueueImpl queue) {
     std::ostringstream out;
     void on_sample(double t, const std::vector<BodyState>& states) override {
       out.precision(17);
-      for (const auto& s : states) out << t << ' ' << s.x_W.transpose() << ' ' << s.q_WM.coeffs().transpose() << '\n';
+      for (const auto& s : states)
+        out << t << ' ' << s.x_W.transpose() << ' ' << s.q_WM.coeffs().transpose() << '\n';
     }
     void on_collision(const CollisionRecord& r) override {
       out.precision(17);
