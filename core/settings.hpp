@@ -50,9 +50,6 @@ struct Settings {
   RestitutionLaw restitution_law = RestitutionLaw::kStronge;
   MicrocollisionRule microcollision_rule = MicrocollisionRule::kDriftFree;
 
-  // Relative tolerance of the numerical free-rigid-body rotation where no closed form is used [-].
-  double rotation_tolerance = 1e-13;
-
   // Relative coplanarity tolerance of convex hulls built from points [-], times the diagonal of
   // the points' bounding box: hull facets whose planes agree within it become one polygon face,
   // and thinner point sets are rejected as coplanar. Larger merges more near-coplanar facets
@@ -69,6 +66,12 @@ struct Settings {
   // rotation. A body whose moments differ by delta (relative) below this moves as if symmetric,
   // with an orientation error ~ delta * |omega| * t; larger is never needed for accuracy.
   double inertia_symmetry_tolerance = 1e-12;
+
+  // The centre-of-pressure rule for face-on-face contacts (DESIGN.md §4): the impulse's line of
+  // action through the centre of mass while it meets the contact patch, so a sliding block does
+  // not rock from corner to corner. false: the single patch point approaching fastest (for
+  // comparison; a flat block then pitches and creeps).
+  bool centre_of_pressure = true;
 
   // Broad-phase horizon [s]: each moving body's swept box covers this much of its future
   // ballistic flight, and is refreshed (an event of its own) when it runs out or the body

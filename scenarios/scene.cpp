@@ -231,7 +231,16 @@ void parse_settings(const Reader& r, const json& value, const std::string& path,
   r.object(value, path);
   r.only_keys(value, path,
               {"envelope", "microcollision_speed", "integration_tolerance", "restitution_law",
-               "microcollision_rule", "rotation_tolerance", "retry_limit"});
+               "microcollision_rule", "retry_limit", "centre_of_pressure", "broad_phase_horizon"});
+  if (value.contains("centre_of_pressure")) {
+    const json& v = value["centre_of_pressure"];
+    if (!v.is_boolean()) r.fail_value(path + "/centre_of_pressure", v, "true or false");
+    s.centre_of_pressure = v.get<bool>();
+  }
+  if (value.contains("broad_phase_horizon")) {
+    s.broad_phase_horizon_s =
+        r.positive(value["broad_phase_horizon"], path + "/broad_phase_horizon");
+  }
   if (value.contains("envelope")) s.envelope_m = r.positive(value["envelope"], path + "/envelope");
   if (value.contains("microcollision_speed")) {
     s.microcollision_speed_mps =
@@ -244,9 +253,6 @@ void parse_settings(const Reader& r, const json& value, const std::string& path,
       r.fail_value(path + "/integration_tolerance", value["integration_tolerance"],
                    "a relative tolerance in [1e-15, 1)");
     }
-  }
-  if (value.contains("rotation_tolerance")) {
-    s.rotation_tolerance = r.positive(value["rotation_tolerance"], path + "/rotation_tolerance");
   }
   if (value.contains("restitution_law")) {
     std::string law = r.string(value["restitution_law"], path + "/restitution_law");

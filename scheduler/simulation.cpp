@@ -310,7 +310,7 @@ struct Simulation::Impl {
       const Vec3 w_in = w_rel - c.n_W * c.n_W.dot(w_rel);
       // The centre-of-pressure rule (DESIGN.md §4) for a dynamic body on a fixed or kinematic
       // one, touching over a polygon and not rocking faster than the microcollision speed.
-      if (one_dynamic && c.patch.size() >= 3 &&
+      if (settings().centre_of_pressure && one_dynamic && c.patch.size() >= 3 &&
           w_in.norm() * patch_radius <= std::max(c.v_micro, 1e-9)) {
         c.centre_of_pressure = true;
         c.point_W = foot;
