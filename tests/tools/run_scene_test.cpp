@@ -8,6 +8,7 @@
 
 #include <cstdio>
 #include <fstream>
+#include <iterator>
 
 using nlohmann::json;
 using palpable::tools::run_scene;
@@ -116,4 +117,23 @@ TEST_CASE("every bad scene is rejected before anything runs and leaves no file",
     CHECK_FALSE(exists(options.events_path));
     std::remove(path.c_str());
   }
+}
+
+TEST_CASE("two runs of a scene write byte-identical traces and events", "[tools][run]") {
+  auto run_once = [](const std::string& suffix) {
+    RunOptions options;
+    options.scene_path = scene("block_on_ramp_decelerating.json");
+    options.trace_path = "run_scene_test_det_trace" + suffix + ".csv";
+    options.events_path = "run_scene_test_det_events" + suffix + ".csv";
+    run_scene(options);
+    std::ifstream trace(options.trace_path), events(options.events_path);
+    std::string text((std::istreambuf_iterator<char>(trace)), std::istreambuf_iterator<char>());
+    text += std::string((std::istreambuf_iterator<char>(events)), std::istreambuf_iterator<char>());
+    std::remove(options.trace_path.c_str());
+    std::remove(options.events_path.c_str());
+    return text;
+  };
+  const std::string first = run_once("1");
+  CHECK(first.size() > 10000);
+  CHECK(first == run_once("2"));
 }

@@ -240,7 +240,13 @@ ImpactSpec parse_impact_spec_text(const std::string& text, const std::string& so
     // Syntax errors, and numbers out of range of a double (e.g. 1e999).
     throw InputError(source, std::string("not valid JSON: ") + e.what());
   }
-  return parse_impact_spec(spec);
+  try {
+    return parse_impact_spec(spec);
+  } catch (const InputError& e) {
+    // Name the file as well as the JSON path, as scene errors do.
+    throw InputError(source + ":" + e.where(),
+                     std::string(e.what()).substr(e.where().empty() ? 0 : e.where().size() + 2));
+  }
 }
 
 json resolve_impact(const ImpactSpec& spec) {
