@@ -101,7 +101,12 @@ struct Simulation::Impl {
     double g_n = 0.0;             // relative normal acceleration toward contact (>= 0)
     double v_micro = 0.0;         // microcollision speed of this contact
     Vec3 a_rel_W = Vec3::Zero();  // slip acceleration at the moving contact location
+    // The centre-of-pressure rule applies (DESIGN.md §4): over a polygon, the line of action
+    // passes through the centre of mass; over a segment (edge on face), only the rotation about
+    // the in-plane axis across the segment is held, and rotation about the segment stays free.
     bool centre_of_pressure = false;
+    bool segment = false;
+    Vec3 segment_dir_W = Vec3::Zero();  // unit, along the segment patch
     std::vector<Vec3> patch;
   };
 
@@ -310,10 +315,22 @@ struct Simulation::Impl {
       const Vec3 w_in = w_rel - c.n_W * c.n_W.dot(w_rel);
       // The centre-of-pressure rule (DESIGN.md §4) for a dynamic body on a fixed or kinematic
       // one, touching over a polygon and not rocking faster than the microcollision speed.
+      const double rocking_limit = std::max(c.v_micro, 1e-9);
+      const Vec3 along =
+          c.patch.size() == 2 ? (c.patch[1] - c.patch[0]).normalized() : Vec3::Zero();
       if (settings().centre_of_pressure && one_dynamic && c.patch.size() >= 3 &&
-          w_in.norm() * patch_radius <= std::max(c.v_micro, 1e-9)) {
+          w_in.norm() * patch_radius <= rocking_limit) {
         c.centre_of_pressure = true;
         c.point_W = foot;
+      } else if (settings().centre_of_pressure && one_dynamic && c.patch.size() == 2 &&
+                 along.allFinite() &&
+                 std::abs(w_rel.dot(c.n_W.cross(along))) * patch_radius <= rocking_limit) {
+        // Edge on face: the point of the segment nearest the foot of the centre of mass.
+        c.centre_of_pressure = true;
+        c.segment = true;
+        c.segment_dir_W = along;
+        const double length = (c.patch[1] - c.patch[0]).norm();
+        c.point_W = c.patch[0] + along * std::clamp((foot - c.patch[0]).dot(along), 0.0, length);
       } else {
         // Otherwise the patch point approaching fastest (the corner that lands first); among
         // equals, the one nearest the foot of the centre of mass.
@@ -370,7 +387,8 @@ struct Simulation::Impl {
   }
 
   // Resolves the collision and applies it to both bodies; returns the record.
-  CollisionRecord resolve(const PairRuntime& p, Contact& c, double t) {
+  // `depth` counts re-resolutions at a moved contact point (at most one per rule).
+  CollisionRecord resolve(const PairRuntime& p, Contact& c, double t, int depth = 0) {
     const Material& material = sim.world_.material(p.a, p.b);
     CollisionParameters params = collision_parameters(material, settings());
     params.min_rebound_speed = c.g_n > 0.0 ? c.v_micro : 0.0;
@@ -380,8 +398,19 @@ struct Simulation::Impl {
     Body& b1 = body(p.a);
     Body& b2 = body(p.b);
     if (c.centre_of_pressure) {
-      // The impulse's line of action through the centre of mass: no in-plane rotation change.
-      (b1.is_dynamic() ? cb1 : cb2).inv_inertia_W.setZero();
+      ContactBody& cd = b1.is_dynamic() ? cb1 : cb2;
+      if (!c.segment) {
+        // The impulse's line of action through the centre of mass: no rotation change at all.
+        cd.inv_inertia_W.setZero();
+      } else {
+        // Rotation held about m = n x s: the inverse inertia of a body free to turn only about
+        // the segment s and the normal n, V (V^T I V)^-1 V^T with V = [s n].
+        Eigen::Matrix<double, 3, 2> V;
+        V.col(0) = c.segment_dir_W;
+        V.col(1) = c.n_W;
+        const Mat3 I_W = cd.inv_inertia_W.inverse();
+        cd.inv_inertia_W = V * (V.transpose() * I_W * V).inverse() * V.transpose();
+      }
     }
     const Mat3 K_c = R_WC.transpose() * collision_matrix_W(cb1, cb2) * R_WC;
     const Vec3 u0_c =
@@ -409,7 +438,27 @@ struct Simulation::Impl {
     }
     Vec3 p_W = R_WC * result.p_c;
 
-    if (c.centre_of_pressure) {
+    if (c.centre_of_pressure && c.segment) {
+      // Where along the segment must the impulse act so that its torque about m vanishes?
+      const Vec3 x_D = b1.is_dynamic() ? b1.state.x_W : b2.state.x_W;
+      const Vec3 m = c.n_W.cross(c.segment_dir_W);
+      const double denominator = c.segment_dir_W.cross(p_W).dot(m);
+      const double lambda =
+          denominator != 0.0 ? -(c.point_W - x_D).cross(p_W).dot(m) / denominator : 0.0;
+      const double s0 = (c.point_W - c.patch[0]).dot(c.segment_dir_W);
+      const double length = (c.patch[1] - c.patch[0]).norm();
+      const double s_pressure = s0 + lambda;
+      const bool inside = s_pressure >= 0.0 && s_pressure <= length;
+      if (!inside || (depth == 0 && std::abs(lambda) > 1e-12 * (1.0 + length))) {
+        // Inside: resolve once more at the centre of pressure (K depends on the point). Outside:
+        // the segment cannot hold that torque and the body tips about the end it reaches.
+        c.point_W = c.patch[0] + c.segment_dir_W * std::clamp(s_pressure, 0.0, length);
+        c.body1.r_W = c.point_W - b1.state.x_W;
+        c.body2.r_W = c.point_W - b2.state.x_W;
+        if (!inside) c.centre_of_pressure = c.segment = false;
+        return resolve(p, c, t, depth + 1);
+      }
+    } else if (c.centre_of_pressure) {
       // Where does the line of action through the centre of mass meet the contact plane?
       const bool d_is_1 = b1.is_dynamic();
       const Vec3 x_D = d_is_1 ? b1.state.x_W : b2.state.x_W;
@@ -421,7 +470,7 @@ struct Simulation::Impl {
         c.point_W = exit_point(c.patch, c.n_W, c.point_W, pressure);
         c.body1.r_W = c.point_W - b1.state.x_W;
         c.body2.r_W = c.point_W - b2.state.x_W;
-        return resolve(p, c, t);
+        return resolve(p, c, t, depth + 1);
       }
     }
 
@@ -432,9 +481,15 @@ struct Simulation::Impl {
       b.state.w_W = cb.w_W;
       if (c.centre_of_pressure) {
         // A face resting on a face does not rock: the pressure over the patch takes out the
-        // small in-plane relative rotation (a plastic slap; the spin about n stays free).
+        // small in-plane relative rotation (a plastic slap; the spin about n stays free). Over a
+        // segment, only the rotation about m = n x s.
         const Vec3 w_rel = b.state.w_W - other.state.w_W;
-        b.state.w_W -= w_rel - c.n_W * c.n_W.dot(w_rel);
+        if (c.segment) {
+          const Vec3 m = c.n_W.cross(c.segment_dir_W);
+          b.state.w_W -= m * m.dot(w_rel);
+        } else {
+          b.state.w_W -= w_rel - c.n_W * c.n_W.dot(w_rel);
+        }
       }
     };
     store(b1, cb1, b2);
