@@ -37,7 +37,15 @@ ToiBound toi_bound(const ToiMotion& motion1, const ToiMotion& motion2,
                         rotational_term(motion2, d_hat);
   bound.closing_accel = (motion1.a_W - motion2.a_W).dot(d_hat);
   const double delta = closest.distance - d_target;
-  bound.dt = solve_gap_closing(bound.closing_accel, bound.closing_speed, delta);
+  const double a = bound.closing_accel, b = bound.closing_speed;
+  if (delta <= 0.0 && b < 0.0) {
+    // Already inside the target gap but receding even with the rotational terms (the flight
+    // after a microcollision): the gap stays above its present value until the closing
+    // acceleration can bring it back, t = -2b/a; never, without one.
+    bound.dt = a > 0.0 ? -2.0 * b / a : kInfinity;
+    return bound;
+  }
+  bound.dt = solve_gap_closing(a, b, delta);
   if (bound.dt < settings.toi_min_progress_s) {
     bound.dt = settings.toi_min_progress_s;
     bound.floored = true;

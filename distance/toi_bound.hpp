@@ -61,7 +61,9 @@ struct ToiBound {
 double solve_gap_closing(double a, double b, double delta);
 
 // The conservative bound from the closest-feature result (status separated or touching; any other
-// status gives dt = 0). d_target [m] < envelope.
+// status gives dt = 0). d_target [m] < envelope. A pair already inside the target gap and
+// receding (closing speed b < 0) gets the time its gap can be back at its present value,
+// -2b/a (infinite without a closing acceleration a): no contact is possible before it.
 ToiBound toi_bound(const ToiMotion& motion1, const ToiMotion& motion2,
                    const DistanceResult& closest, double d_target, const Settings& settings);
 

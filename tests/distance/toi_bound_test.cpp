@@ -264,3 +264,31 @@ TEST_CASE("the bound never overshoots on 10,000 random ballistic trajectory pair
   CHECK(overshoots == 0);
   CHECK(contacts > 1000);
 }
+
+TEST_CASE("inside the target gap and receding: back at the present gap after -2b/a",
+          "[distance][toi]") {
+  // A block just lifted off by a microcollision: 3e-5 m above a fixed plane, target 5e-5 m,
+  // rising at 0.04 m/s against gravity's 9.81 along the normal.
+  ToiMotion block, ground;
+  block.v_W = Vec3(0.3, 0.0, 0.04);
+  block.a_W = kGravity;
+  DistanceResult closest;
+  closest.status = ContactStatus::kSeparated;
+  closest.distance = 3e-5;
+  closest.n_W = Vec3::UnitZ();  // from the ground (body 2) to the block (body 1)
+  Settings settings;
+  ToiBound bound = toi_bound(block, ground, closest, 5e-5, settings);
+  CHECK_FALSE(bound.floored);
+  CHECK(bound.dt == Approx(2.0 * 0.04 / 9.81).epsilon(1e-14));
+  // The exact gap 3e-5 + 0.04 t - 9.81 t^2 / 2 stays above 3e-5 until then.
+  for (int k = 1; k < 100; ++k) {
+    const double t = bound.dt * k / 100.0;
+    CHECK(3e-5 + 0.04 * t - 0.5 * 9.81 * t * t >= 3e-5);
+  }
+  // Receding without a closing acceleration: never again.
+  block.a_W = Vec3::Zero();
+  CHECK(toi_bound(block, ground, closest, 5e-5, settings).dt == kInfinity);
+  // Approaching inside the target gap: now.
+  block.v_W.z() = -0.04;
+  CHECK(toi_bound(block, ground, closest, 5e-5, settings).dt == settings.toi_min_progress_s);
+}
