@@ -211,6 +211,7 @@ DistanceResult closest_features(const ShapeGeometry& g1, const Pose& pose1, cons
   }
   const std::size_t n = pieces1.size() * pieces2.size();
   if (cache.pieces.size() != n) cache.pieces.assign(n, FeaturePair{});
+  if (cache.piece_results.size() != n) cache.piece_results.assign(n, DistanceResult{});
   DistanceResult best;
   best.distance = kInfinity;
   int steps = 0;
@@ -223,6 +224,7 @@ DistanceResult closest_features(const ShapeGeometry& g1, const Pose& pose1, cons
       steps += r.steps;
       r.piece1 = static_cast<int>(i);
       r.piece2 = static_cast<int>(j);
+      cache.piece_results[i * pieces2.size() + j] = r;
       // Failure and penetration dominate; otherwise the smallest distance.
       auto rank = [](ContactStatus s) {
         return s == ContactStatus::kFailed ? 0 : (s == ContactStatus::kPenetrating ? 1 : 2);

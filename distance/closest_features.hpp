@@ -74,10 +74,6 @@ class ShapeGeometry {
 
 // The per-pair cache (owned by the caller, one per body pair): the feature pair of each piece
 // pair, and for halfspace pairs the support vertex.
-struct PairCache {
-  FeaturePair single;               // non-compound pairs
-  std::vector<FeaturePair> pieces;  // compound pairs: [piece1 * num_pieces2 + piece2]
-};
 
 struct DistanceResult {
   ContactStatus status = ContactStatus::kFailed;
@@ -91,6 +87,14 @@ struct DistanceResult {
   int piece1 = 0;  // which piece of a compound
   int piece2 = 0;
   int steps = 0;  // feature steps taken (all piece pairs)
+};
+
+struct PairCache {
+  FeaturePair single;               // non-compound pairs
+  std::vector<FeaturePair> pieces;  // compound pairs: [piece1 * num_pieces2 + piece2]
+  // Compound pairs: the last query's result for every piece pair (same indexing). The closest
+  // piece alone does not bound when the bodies can touch: another piece may close faster.
+  std::vector<DistanceResult> piece_results;
 };
 
 // `max_steps` bounds each V-Clip walk (Settings::distance_max_steps; status kFailed beyond it).

@@ -200,4 +200,27 @@ ToiBound time_of_impact(const Body& body1, const BodyState& state1, const ShapeG
   return toi_bound(m1, m2, closest, d_target, settings);
 }
 
+ToiBound time_of_impact(const Body& body1, const BodyState& state1, const ShapeGeometry& geometry1,
+                        const Body& body2, const BodyState& state2, const ShapeGeometry& geometry2,
+                        const DistanceResult& closest, const PairCache& cache,
+                        const Vec3& gravity_W, const Settings& settings) {
+  if (cache.piece_results.empty()) {
+    return time_of_impact(body1, state1, geometry1, body2, state2, geometry2, closest, gravity_W,
+                          settings);
+  }
+  // Body-level motions bound every piece: the rotation radius and reach cover all pieces.
+  const double d_target = 0.5 * settings.envelope_m;
+  const ToiMotion m1 =
+      toi_motion(body1, state1, geometry1, gravity_W, state2.x_W, geometry2.reach(), settings);
+  const ToiMotion m2 =
+      toi_motion(body2, state2, geometry2, gravity_W, state1.x_W, geometry1.reach(), settings);
+  ToiBound best;
+  best.dt = kInfinity;
+  for (const DistanceResult& piece : cache.piece_results) {
+    const ToiBound b = toi_bound(m1, m2, piece, d_target, settings);
+    if (b.dt < best.dt) best = b;
+  }
+  return best;
+}
+
 }  // namespace palpable

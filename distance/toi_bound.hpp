@@ -102,4 +102,12 @@ ToiBound time_of_impact(const Body& body1, const BodyState& state1, const ShapeG
                         const DistanceResult& closest, const Vec3& gravity_W,
                         const Settings& settings);
 
+// The same for a pair whose last query filled `cache.piece_results` (a compound in the pair): the
+// smallest bound over every piece pair, each from its own distance and direction; otherwise as
+// above.
+ToiBound time_of_impact(const Body& body1, const BodyState& state1, const ShapeGeometry& geometry1,
+                        const Body& body2, const BodyState& state2, const ShapeGeometry& geometry2,
+                        const DistanceResult& closest, const PairCache& cache,
+                        const Vec3& gravity_W, const Settings& settings);
+
 }  // namespace palpable

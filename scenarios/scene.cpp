@@ -194,6 +194,11 @@ std::shared_ptr<const Shape> parse_shape(const Reader& r, const json& value,
         if (parts[i].contains("orientation")) {
           part.orientation_M = r.quaternion(parts[i]["orientation"], part_path + "/orientation");
         }
+        // A convex part's points are recentred at its centre of mass when built; put it back, so
+        // that a part's vertices are where the scene says (in the part frame at `position`).
+        if (const auto* hull = std::get_if<ConvexPolyhedron>(part.shape.get())) {
+          part.position_M += part.orientation_M * hull->com_shift_M();
+        }
         compound.parts.push_back(std::move(part));
       }
       return std::make_shared<const Shape>(std::move(compound));
@@ -421,10 +426,12 @@ Scene scene_from_json(const json& doc, const std::string& source) {
         BodyId ids[2];
         for (int k = 0; k < 2; ++k) {
           std::string name = r.string(names_json[k], path + "/bodies/" + std::to_string(k));
+          if (name == "*" && k == 1) continue;  // the first body with every other body
           ids[k] = scene.world.find_body(name);
           if (!ids[k].valid()) {
             r.fail_value(path + "/bodies/" + std::to_string(k), names_json[k],
-                         "the name of a body in /bodies");
+                         k == 0 ? "the name of a body in /bodies"
+                                : "the name of a body in /bodies, or \"*\" for every other body");
           }
         }
         if (ids[0] == ids[1]) r.fail_value(path + "/bodies", names_json, "two different bodies");

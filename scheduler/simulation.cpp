@@ -376,6 +376,27 @@ struct Simulation::Impl {
     return c;
   }
 
+  // The piece-pair result a collision would be resolved at: `dr` itself, or, for a pair with a
+  // compound, the piece within the envelope approaching fastest (a ball in a crease touches two
+  // pieces; the closest may be the one it is leaving).
+  const DistanceResult& contact_result(const PairRuntime& p, const BodyState& s1,
+                                       const BodyState& s2, const DistanceResult& dr) const {
+    const DistanceResult* best = &dr;
+    double best_u_n = kInfinity;
+    for (const DistanceResult& r : p.cache.piece_results) {
+      if (r.status == ContactStatus::kFailed ||
+          (r.status != ContactStatus::kPenetrating && r.distance > settings().envelope_m)) {
+        continue;
+      }
+      const Contact c = make_contact(p, s1, s2, r, /*with_patch=*/false);
+      if (approaching(c) && c.u_n < best_u_n) {
+        best_u_n = c.u_n;
+        best = &r;
+      }
+    }
+    return *best;
+  }
+
   bool approaching(const Contact& c) const {
     // u_n = 0 with gravity pressing the bodies together counts as approaching: a body left at
     // rest in contact by an e = 0 collision must collide again (DESIGN.md §4). Without it, an
@@ -554,17 +575,19 @@ struct Simulation::Impl {
       return t + floor;
     }
     bool resting = false;  // within the envelope, neither approaching nor accelerated together
-    if (dr.status == ContactStatus::kPenetrating || dr.distance <= settings().envelope_m) {
-      Contact c = make_contact(p, s1, s2, dr, /*with_patch=*/false);
+    const DistanceResult& contact = contact_result(p, s1, s2, dr);
+    if (contact.status == ContactStatus::kPenetrating ||
+        contact.distance <= settings().envelope_m) {
+      Contact c = make_contact(p, s1, s2, contact, /*with_patch=*/false);
       if (approaching(c)) return t;
-      if (dr.status == ContactStatus::kPenetrating) return t + floor;
+      if (contact.status == ContactStatus::kPenetrating) return t + floor;
       resting = c.g_n == 0.0;
     }
     const Body& b1 = body(p.a);
     const Body& b2 = body(p.b);
     ToiBound bound =
         time_of_impact(b1, s1, *bodies[p.a.index].geometry, b2, s2, *bodies[p.b.index].geometry, dr,
-                       sim.world_.gravity_W, settings());
+                       p.cache, sim.world_.gravity_W, settings());
     if (bound.floored) ++sim.stats_.floored_bounds;
     if (bound.exact) ++sim.stats_.exact_bounds;
     if (bound.exact && resting && bound.dt < floor) {
@@ -604,9 +627,11 @@ struct Simulation::Impl {
     const BodyState& s2 = body(p.b).state;
     ++sim.stats_.pair_checks;
     DistanceResult dr = query(p, s1, s2);
-    if (dr.status != ContactStatus::kFailed &&
-        (dr.status == ContactStatus::kPenetrating || dr.distance <= settings().envelope_m)) {
-      Contact c = make_contact(p, s1, s2, dr, /*with_patch=*/true);
+    const DistanceResult& contact = contact_result(p, s1, s2, dr);
+    if (contact.status != ContactStatus::kFailed &&
+        (contact.status == ContactStatus::kPenetrating ||
+         contact.distance <= settings().envelope_m)) {
+      Contact c = make_contact(p, s1, s2, contact, /*with_patch=*/true);
       if (approaching(c)) {
         if (t == p.last_collision_t) {
           ++p.collisions_at_t;

@@ -6,6 +6,10 @@ const Material& World::material(BodyId a, BodyId b) const {
   for (const PairMaterial& p : pair_materials) {
     if ((p.a == a && p.b == b) || (p.a == b && p.b == a)) return p.material;
   }
+  // A pair with one body and "any other" (an invalid id) comes second.
+  for (const PairMaterial& p : pair_materials) {
+    if (!p.b.valid() && (p.a == a || p.a == b)) return p.material;
+  }
   return default_material;
 }
 

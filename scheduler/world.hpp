@@ -10,6 +10,8 @@
 
 namespace palpable {
 
+// The material of the pair (a, b); b invalid: a with every other body (a pair naming both bodies
+// takes precedence).
 struct PairMaterial {
   BodyId a;
   BodyId b;

@@ -262,3 +262,32 @@ TEST_CASE("a rod sliding on an edge stops at v0 / (mu g) without pitching", "[sc
   }
   CHECK(max_pitch_rate_without > 1e-3);
 }
+
+TEST_CASE("a ball sliding on a compound's floor into its wall bounces off the wall",
+          "[scheduler][compound]") {
+  // The closest piece is the floor (under the ball, within the envelope); the wall is farther
+  // but closing at 5 m/s. A bound from the closest piece alone would let the ball pass into it.
+  World world;
+  world.gravity_W = Vec3(0, 0, -9.81);
+  world.default_material = Material{0.0, 1.0};
+  Body table;
+  table.name = "table";
+  table.motion = MotionKind::kFixed;
+  Compound compound;
+  CompoundPart floor, wall;
+  floor.shape = std::make_shared<const Shape>(ConvexPolyhedron::box(Vec3(1.0, 1.0, 0.05)));
+  floor.position_M = Vec3(0, 0, -0.05);
+  wall.shape = std::make_shared<const Shape>(ConvexPolyhedron::box(Vec3(0.05, 1.0, 0.2)));
+  wall.position_M = Vec3(0.5, 0, 0.2);
+  compound.parts = {floor, wall};
+  table.shape = std::make_shared<const Shape>(compound);
+  table.mass = infinite_mass_properties();
+  world.add(table);
+  world.add(sphere_body("ball", 0.05, 1.0, Vec3(0, 0, 0.05 + 5e-5), Vec3(5.0, 0, 0)));
+  Simulation sim(world, SimulationOptions{});
+  sim.run_until(0.2, nullptr);
+  const BodyState s = sim.state_at(BodyId{1}, 0.2);
+  CHECK(sim.stats().penetrations == 0);
+  CHECK(s.v_W.x() == Approx(-5.0).epsilon(1e-9));  // e = 1, mu = 0: an elastic bounce
+  CHECK(s.x_W.x() < 0.45 - 0.05);
+}

@@ -1,0 +1,152 @@
+#!/usr/bin/env python3
+"""Writes the paper's experiment scenes (scenarios/*.json) whose geometry is easier to compute
+than to type: pool break, chain of balls, balls in a dish, bowling, coins. Run from the repository
+root: python3 scenarios/generate_scenes.py. The JSON files are committed; this script only
+documents and reproduces how they were made."""
+import json
+import math
+import os
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def compact(obj, indent=0):
+    """JSON with short numeric arrays on one line."""
+    pad = "  " * indent
+    if isinstance(obj, dict):
+        if not obj:
+            return "{}"
+        items = [f'{pad}  {json.dumps(k)}: {compact(v, indent + 1)}' for k, v in obj.items()]
+        return "{\n" + ",\n".join(items) + f"\n{pad}}}"
+    if isinstance(obj, list):
+        if all(not isinstance(x, (dict, list)) for x in obj) or \
+           all(isinstance(x, list) and all(not isinstance(y, (dict, list)) for y in x) for x in obj) and len(obj) <= 4:
+            return json.dumps(obj)
+        items = [f"{pad}  {compact(v, indent + 1)}" for v in obj]
+        return "[\n" + ",\n".join(items) + f"\n{pad}]"
+    if isinstance(obj, float):
+        return repr(obj)
+    return json.dumps(obj)
+
+
+def write(name, scene):
+    with open(os.path.join(HERE, name), "w") as f:
+        f.write(compact(scene) + "\n")
+
+
+def r17(x):
+    return float(f"{x:.17g}")
+
+
+G = [0, 0, -9.81]
+
+
+def chain_of_balls():
+    # Eight steel balls (12.5 mm radius) touching in a line on a table, struck at one end by a
+    # ninth at 1 m/s. Paper: 2.5 s virtual, 7.3 s real on 1995 hardware.
+    r, m = 0.0125, 0.0642
+    gap = 0.5e-4
+    bodies = [{"name": "table", "motion": "fixed",
+               "shape": {"type": "halfspace", "normal": [0, 0, 1], "offset": 0}}]
+    z = r17(r + gap)
+    bodies.append({"name": "striker", "mass": m, "shape": {"type": "sphere", "radius": r},
+                   "position": [-0.2, 0, z], "velocity": [1.0, 0, 0],
+                   "angular_velocity": [0, r17(1.0 / r), 0]})
+    for i in range(8):
+        bodies.append({"name": f"ball{i}", "mass": m, "shape": {"type": "sphere", "radius": r},
+                       "position": [r17(i * (2 * r + gap)), 0, z]})
+    write("chain_of_balls.json", {
+        "format": "palpable-scene/1", "name": "chain_of_balls",
+        "description": "Eight steel balls (r = 12.5 mm, 64.2 g) touching in a line on a table, struck at one end by a ninth rolling at 1 m/s. The momentum passes down the chain (e = 0.95 between balls) and the far ball leaves. Mirtich & Canny: 2.5 s virtual, 7.3 s real in 1995.",
+        "gravity": G, "end_time": 2.5, "output": {"interval": 0.01},
+        "settings": {"envelope": 1e-4},
+        "materials": {"default": {"friction": 0.1, "restitution": 0.95},
+                      "pairs": [{"bodies": ["table", "*"], "friction": 0.2, "restitution": 0.3}]},
+        "bodies": bodies})
+
+
+def pool_break():
+    # Regulation 9 ft table: playing surface 2.54 m x 1.27 m; balls 57.15 mm, 170 g. The rack's
+    # balls are 0.1 mm apart (inside each other's envelopes, as in the paper); cue ball at 8 m/s.
+    r, m = 0.028575, 0.17
+    length, width = 2.54, 1.27
+    gap = 1e-4 * 0.5
+    cushion_h, cushion_w = 0.0363, 0.05  # nose height ~ 0.635 ball diameter
+    z = r17(r + gap)
+    parts = []
+    for sx in (-1, 1):  # end cushions
+        parts.append({"shape": {"type": "box", "half_extents": [cushion_w / 2, width / 2 + cushion_w, cushion_h / 2]},
+                      "position": [r17(sx * (length / 2 + cushion_w / 2)), 0, r17(cushion_h / 2)]})
+    for sy in (-1, 1):  # side cushions
+        parts.append({"shape": {"type": "box", "half_extents": [length / 2 + cushion_w, cushion_w / 2, cushion_h / 2]},
+                      "position": [0, r17(sy * (width / 2 + cushion_w / 2)), r17(cushion_h / 2)]})
+    bodies = [{"name": "cloth", "motion": "fixed",
+               "shape": {"type": "halfspace", "normal": [0, 0, 1], "offset": 0}},
+              {"name": "cushions", "motion": "fixed", "shape": {"type": "compound", "parts": parts}}]
+    bodies.append({"name": "cue", "mass": m, "shape": {"type": "sphere", "radius": r},
+                   "position": [-0.635, 0, z], "velocity": [8.0, 0, 0],
+                   "angular_velocity": [0, r17(8.0 / r), 0]})
+    d = 2 * r + 1e-4  # centre spacing: 0.1 mm apart
+    k = 0
+    for row in range(5):
+        for j in range(row + 1):
+            x = 0.635 + row * d * math.sqrt(3) / 2
+            y = (j - row / 2) * d
+            k += 1
+            bodies.append({"name": f"ball{k}", "mass": m, "shape": {"type": "sphere", "radius": r},
+                           "position": [r17(x), r17(y), z]})
+    write("pool_break.json", {
+        "format": "palpable-scene/1", "name": "pool_break",
+        "description": "A break on a regulation 9 ft table (2.54 x 1.27 m; balls 57.15 mm, 170 g): 15 racked balls 0.1 mm apart (inside each other's envelopes, as in the paper) and a cue ball rolling at 8 m/s. The cloth is a fixed halfspace, the cushions a fixed compound of four boxes. Ball-ball e = 0.93, mu = 0.05; ball-cloth mu = 0.2, e = 0.5; ball-cushion mu = 0.15, e = 0.75. Mirtich & Canny: 3.0 s virtual, 95 s real in 1995.",
+        "gravity": G, "end_time": 3.0, "output": {"interval": 0.01},
+        "settings": {"envelope": 1e-4},
+        "materials": {"default": {"friction": 0.05, "restitution": 0.93},
+                      "pairs": [{"bodies": ["cloth", "*"], "friction": 0.2, "restitution": 0.5},
+                                {"bodies": ["cushions", "*"], "friction": 0.15, "restitution": 0.75}]},
+        "bodies": bodies})
+
+
+def balls_in_dish():
+    # A concave dish: a flat 16-gon bottom (apothem 8 cm) and 16 walls tilted at 25 degrees, each
+    # the convex hull of its trapezoidal top face (exactly its sector, so that no piece pokes
+    # above its neighbour's surface at the concave creases) and that face moved 2 cm inward.
+    n_sides, bottom_r, slope = 16, 0.08, math.radians(25)
+    wall_len, wall_t = 0.2, 0.02
+    half = math.pi / n_sides
+    parts = [{"shape": {"type": "prism", "radius": r17(bottom_r / math.cos(half)),
+                        "half_height": wall_t / 2, "sides": n_sides},
+              "position": [0, 0, -wall_t / 2],
+              "orientation": [r17(math.cos(half / 2)), 0, 0, r17(math.sin(half / 2))]}]
+    r_out = bottom_r + wall_len * math.cos(slope)
+    z_out = wall_len * math.sin(slope)
+    for i in range(n_sides):
+        phi = 2 * math.pi * i / n_sides
+        top = []
+        for radius, z in ((bottom_r, 0.0), (r_out, z_out)):
+            for side in (-1, 1):
+                a = phi + side * half
+                top.append((radius / math.cos(half) * math.cos(a), radius / math.cos(half) * math.sin(a), z))
+        # Inward-up normal of the wall's top face.
+        n = (-math.sin(slope) * math.cos(phi), -math.sin(slope) * math.sin(phi), math.cos(slope))
+        points = top + [(x - wall_t * n[0], y - wall_t * n[1], z - wall_t * n[2]) for x, y, z in top]
+        parts.append({"shape": {"type": "convex", "vertices": [[r17(c) for c in p] for p in points]}})
+    bodies = [{"name": "dish", "motion": "fixed", "shape": {"type": "compound", "parts": parts}}]
+    r, m = 0.02, 0.0335  # 40 mm glass marbles... heavy ones
+    positions = [(0.0, 0.0, 0.15), (0.09, 0.0, 0.25), (-0.06, 0.07, 0.3), (0.03, -0.1, 0.35),
+                 (-0.1, -0.05, 0.4), (0.05, 0.09, 0.45)]
+    for i, p in enumerate(positions):
+        bodies.append({"name": f"ball{i}", "mass": m, "shape": {"type": "sphere", "radius": r},
+                       "position": list(p), "velocity": [0, 0, 0]})
+    write("balls_in_dish.json", {
+        "format": "palpable-scene/1", "name": "balls_in_dish",
+        "description": "Six balls (r = 20 mm) dropped into a concave dish built from 17 convex pieces (a flat 16-gon bottom and 16 walls tilted at 25 degrees); they bounce, roll and come to rest at the bottom. Mirtich & Canny: 7.8 s virtual, 95 s real in 1995.",
+        "gravity": G, "end_time": 7.8, "output": {"interval": 0.01},
+        "settings": {"envelope": 1e-4},
+        "materials": {"default": {"friction": 0.3, "restitution": 0.5}},
+        "bodies": bodies})
+
+
+if __name__ == "__main__":
+    chain_of_balls()
+    pool_break()
+    balls_in_dish()
