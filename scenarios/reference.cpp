@@ -34,6 +34,16 @@ Vec3 spec_vec3(const json& spec, const std::string& where, const std::string& ke
   return v.normalized();
 }
 
+// A vector parameter, any length (a velocity).
+Vec3 spec_vector(const json& spec, const std::string& where, const std::string& key) {
+  const json& v = spec.at(key);
+  if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() ||
+      !v[2].is_number()) {
+    throw InputError(where + "/" + key, "got " + v.dump() + ", expected [x, y, z]");
+  }
+  return Vec3(v[0].get<double>(), v[1].get<double>(), v[2].get<double>());
+}
+
 std::string spec_string(const json& spec, const std::string& where, const std::string& key) {
   auto it = spec.find(key);
   if (it == spec.end() || !it->is_string()) {
@@ -236,8 +246,15 @@ json compare_slide_to_roll(const json& spec, const Trace& trace, const std::stri
   std::vector<BodyState> states = trace.series(body);
   const double t0 = trace.times.front();
   const Vec3 x0 = states.front().x_W;
-  const Vec3 v0 = states.front().v_W - n * n.dot(states.front().v_W);
-  Vec3 u0 = v0 + states.front().w_W.cross(-radius * n);
+  // The launch state: the first sample unless given (a body starting in contact has its first
+  // collisions at t = 0 before that sample, which then already carries their impulses).
+  const Vec3 v_start =
+      spec.contains("velocity") ? spec_vector(spec, where, "velocity") : states.front().v_W;
+  const Vec3 w_start = spec.contains("angular_velocity")
+                           ? spec_vector(spec, where, "angular_velocity")
+                           : states.front().w_W;
+  const Vec3 v0 = v_start - n * n.dot(v_start);
+  Vec3 u0 = v0 + w_start.cross(-radius * n);
   u0 -= n * n.dot(u0);
   const double s0 = u0.norm();
   const double t_roll = k * s0 / ((1.0 + k) * mu * g);

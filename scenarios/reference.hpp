@@ -9,7 +9,10 @@
 //   turntable: {"type": "turntable", "body": "ball", "omega": 6.283185307179586,
 //               "axis": [0, 0, 1], "k": 0.4}      (k: I = k m r^2; 2/5 for a solid ball)
 //   slide_to_roll: {"type": "slide_to_roll", "body": "ball", "friction": 0.2, "gravity": 9.81,
-//               "radius": 0.1, "k": 0.4, "normal": [0, 0, 1]}   (sphere sliding on a plane)
+//               "radius": 0.1, "k": 0.4, "normal": [0, 0, 1]}   (sphere sliding on a plane;
+//               optional "velocity", "angular_velocity": the launch state, default the first
+//               sample's — which, for a ball starting on the plane, already holds the impulses
+//               of the collisions at t = 0)
 //   bouncing_ball: {"type": "bouncing_ball", "body": "ball", "restitution": 0.8,
 //               "gravity": 9.81, "radius": 0.1, "ground": 0, "normal": [0, 0, 1], "apexes": 3}
 //               (height = normal . x - ground - radius)

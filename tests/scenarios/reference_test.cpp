@@ -173,6 +173,14 @@ TEST_CASE("slide_to_roll reference: the closed-form slide has zero error",
   CHECK(b["roll_time_closed_form_s"].get<double>() ==
         Approx(2.0 * k * v0 / ((1.0 + k) * mu * g)).epsilon(1e-14));
   CHECK(b["final_speed_closed_form"].get<double>() == Approx(3.0 * v0 / 7.0).epsilon(1e-14));
+  // The same launch state given as parameters instead of read from the first sample.
+  json given = spec;
+  given["angular_velocity"] = {0.0, -v0 / R, 0.0};
+  json c = palpable::compare_with_reference(given, trace, "test");
+  CHECK(c["initial_slip_speed"].get<double>() == b["initial_slip_speed"].get<double>());
+  given["velocity"] = "fast";
+  CHECK_THROWS_WITH(palpable::compare_with_reference(given, trace, "test"),
+                    Catch::Contains("test/velocity"));
 
   // Friction 5 % too weak in the trace: slower deceleration, later rolling, same final speed
   // (5 v0 / 7 does not depend on mu).
