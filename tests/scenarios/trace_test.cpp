@@ -64,7 +64,7 @@ TEST_CASE("malformed traces are rejected naming file and line", "[scenarios][tra
   std::remove(path.c_str());
 }
 
-TEST_CASE("events CSV fills the trace's contacts; bad rows name file and line",
+TEST_CASE("events CSV fills the trace's contacts, bad rows name file and line",
           "[scenarios][trace]") {
   palpable::Trace trace;
   trace.body_names = {"block", "ramp"};
