@@ -34,6 +34,16 @@ Vec3 spec_vec3(const json& spec, const std::string& where, const std::string& ke
   return v.normalized();
 }
 
+// A vector parameter, any length (a velocity).
+Vec3 spec_vector(const json& spec, const std::string& where, const std::string& key) {
+  const json& v = spec.at(key);
+  if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() ||
+      !v[2].is_number()) {
+    throw InputError(where + "/" + key, "got " + v.dump() + ", expected [x, y, z]");
+  }
+  return Vec3(v[0].get<double>(), v[1].get<double>(), v[2].get<double>());
+}
+
 std::string spec_string(const json& spec, const std::string& where, const std::string& key) {
   auto it = spec.find(key);
   if (it == spec.end() || !it->is_string()) {
@@ -217,6 +227,239 @@ json compare_turntable(const json& spec, const Trace& trace, const std::string& 
   return figures;
 }
 
+// Sphere sliding on a plane (DESIGN.md §6): friction -mu m g u_hat acts at the contact point
+// -R n while the slip u = v + w x (-R n) is non-zero; the slip decreases at (1 + 1/k) mu g in a
+// fixed direction, so the sphere rolls from t_roll = k s0 / ((1 + k) mu g) at
+// v_final = v0 - k/(1+k) u0 (= (v0 + k R w0 x n)/(1+k); 5 v0/7 for a solid sphere without spin).
+json compare_slide_to_roll(const json& spec, const Trace& trace, const std::string& where) {
+  std::size_t body = trace.body_index(spec_string(spec, where, "body"), where + "/body");
+  const double mu = spec_number(spec, where, "friction");
+  const double g = spec_number(spec, where, "gravity");
+  const double radius = spec_number(spec, where, "radius");
+  const double k = spec.contains("k") ? spec_number(spec, where, "k") : 0.4;
+  const Vec3 n = spec.contains("normal") ? spec_vec3(spec, where, "normal") : Vec3::UnitZ();
+  if (!(mu > 0.0)) throw InputError(where + "/friction", "expected friction > 0");
+  if (!(g > 0.0)) throw InputError(where + "/gravity", "expected gravity > 0 (its magnitude)");
+  if (!(radius > 0.0)) throw InputError(where + "/radius", "expected radius > 0");
+  if (!(k > 0.0)) throw InputError(where + "/k", "expected k > 0 (I = k m R^2)");
+
+  std::vector<BodyState> states = trace.series(body);
+  const double t0 = trace.times.front();
+  const Vec3 x0 = states.front().x_W;
+  // The launch state: the first sample unless given (a body starting in contact has its first
+  // collisions at t = 0 before that sample, which then already carries their impulses).
+  const Vec3 v_start =
+      spec.contains("velocity") ? spec_vector(spec, where, "velocity") : states.front().v_W;
+  const Vec3 w_start = spec.contains("angular_velocity")
+                           ? spec_vector(spec, where, "angular_velocity")
+                           : states.front().w_W;
+  const Vec3 v0 = v_start - n * n.dot(v_start);
+  Vec3 u0 = v0 + w_start.cross(-radius * n);
+  u0 -= n * n.dot(u0);
+  const double s0 = u0.norm();
+  const double t_roll = k * s0 / ((1.0 + k) * mu * g);
+  const Vec3 v_final = v0 - k / (1.0 + k) * u0;
+
+  json figures;
+  figures["initial_slip_speed"] = s0;
+  figures["roll_time_closed_form_s"] = t_roll;
+  figures["final_speed_closed_form"] = v_final.norm();
+  figures["deceleration_closed_form"] = mu * g;
+  double height_dev = 0.0;
+  for (const BodyState& s : states) height_dev = std::max(height_dev, std::abs(n.dot(s.x_W - x0)));
+  figures["height_deviation_max_m"] = height_dev;
+
+  // Along the slip direction (constant while sliding) the centre's position is a parabola with
+  // second derivative -mu g until t_roll and a line after it: fit both, meet them.
+  Vec3 along = Vec3::Zero();
+  if (s0 > 0.0) along = u0 / s0;
+  std::vector<double> ts, ss, tr, sr;
+  std::vector<Vec3> xr;
+  for (std::size_t i = 0; i < states.size(); ++i) {
+    const double t = trace.times[i] - t0;
+    const double s = (states[i].x_W - x0).dot(along);
+    if (t <= 0.9 * t_roll) {
+      ts.push_back(t);
+      ss.push_back(s);
+    } else if (t >= 1.1 * t_roll) {
+      tr.push_back(t);
+      sr.push_back(s);
+      xr.push_back(states[i].x_W - x0);
+    }
+  }
+  if (tr.size() >= 3) {
+    // Final velocity: a least-squares line through each tangential position component.
+    Vec3 v_fit = Vec3::Zero();
+    for (int axis = 0; axis < 3; ++axis) {
+      std::vector<double> comp;
+      for (const Vec3& x : xr) comp.push_back(x[axis]);
+      v_fit[axis] = polynomial_fit(tr, comp, 1)[1];
+    }
+    v_fit -= n * n.dot(v_fit);
+    figures["final_speed_fit"] = v_fit.norm();
+    if (v_final.norm() > 0.0) {
+      figures["final_speed_rel_error"] = (v_fit.norm() - v_final.norm()) / v_final.norm();
+    }
+    figures["final_velocity_error"] = (v_fit - v_final).norm();
+  }
+  if (s0 > 0.0 && ts.size() >= 5) {
+    auto slide = polynomial_fit(ts, ss, 2);
+    const double deceleration = -2.0 * slide[2];
+    figures["deceleration_fit"] = deceleration;
+    figures["deceleration_rel_error"] = (deceleration - mu * g) / (mu * g);
+    if (tr.size() >= 3 && deceleration > 0.0) {
+      const double v_roll = polynomial_fit(tr, sr, 1)[1];
+      const double t_fit = (slide[1] - v_roll) / deceleration;
+      figures["roll_time_fit_s"] = t_fit;
+      figures["roll_time_error_s"] = t_fit - t_roll;
+    }
+  }
+  figures["mode"] = s0 > 0.0 ? "slide_then_roll" : "rolling";
+  return figures;
+}
+
+// Parabola vertex through three equally spaced samples (y_m, y_0, y_p) at spacing h around t_0:
+// exact for a ballistic flight covering all three.
+std::pair<double, double> parabola_vertex(double t0, double h, double ym, double y0, double yp) {
+  const double curvature = ym - 2.0 * y0 + yp;
+  if (curvature >= 0.0) return {t0, y0};
+  const double dt = 0.5 * h * (ym - yp) / curvature;
+  const double a = curvature / (2.0 * h * h), b = (yp - ym) / (2.0 * h);
+  return {t0 + dt, y0 + b * dt + a * dt * dt};
+}
+
+// Bouncing ball (DESIGN.md §6): dropped from height h0 (above the ground plane n.x = ground, of
+// the sphere's lowest point) with normal speed w0, it hits at t1 = (w0 + v1)/g with
+// v1 = sqrt(w0^2 + 2 g h0); then apex n at t_n + e^n v1/g, height e^(2n) v1^2/(2g); impacts
+// t_(n+1) = t_n + 2 e^n v1/g; rest (Zeno) at t1 + 2 e v1/(g (1 - e)) (= sqrt(2h0/g)(1+e)/(1-e)
+// from rest).
+json compare_bouncing_ball(const json& spec, const Trace& trace, const std::string& where) {
+  std::size_t body = trace.body_index(spec_string(spec, where, "body"), where + "/body");
+  const double e = spec_number(spec, where, "restitution");
+  const double g = spec_number(spec, where, "gravity");
+  const double radius = spec.contains("radius") ? spec_number(spec, where, "radius") : 0.0;
+  const double ground = spec.contains("ground") ? spec_number(spec, where, "ground") : 0.0;
+  const Vec3 n = spec.contains("normal") ? spec_vec3(spec, where, "normal") : Vec3::UnitZ();
+  int count = 3;
+  if (spec.contains("apexes")) {
+    const json& a = spec["apexes"];
+    if (!a.is_number_integer() || a.get<int>() < 1) {
+      throw InputError(where + "/apexes", "got " + a.dump() + ", expected an integer >= 1");
+    }
+    count = a.get<int>();
+  }
+  if (!(e >= 0.0 && e < 1.0)) throw InputError(where + "/restitution", "expected 0 <= e < 1");
+  if (!(g > 0.0)) throw InputError(where + "/gravity", "expected gravity > 0 (its magnitude)");
+  if (!(radius >= 0.0)) throw InputError(where + "/radius", "expected radius >= 0");
+
+  std::vector<BodyState> states = trace.series(body);
+  const double t0 = trace.times.front();
+  std::vector<double> h;
+  for (const BodyState& s : states) h.push_back(n.dot(s.x_W) - ground - radius);
+  const double h0 = h.front();
+  if (!(h0 > 0.0)) throw InputError(where + "/body", "the ball starts on or below the ground");
+  const double w0 = n.dot(states.front().v_W);
+  const double v1 = std::sqrt(w0 * w0 + 2.0 * g * h0);
+  const double t1 = (w0 + v1) / g;
+
+  std::vector<double> impact(count + 1), apex_t(count), apex_h(count);
+  impact[0] = t1;
+  double en = 1.0;
+  for (int i = 0; i < count; ++i) {
+    en *= e;
+    apex_t[i] = impact[i] + en * v1 / g;
+    apex_h[i] = en * en * v1 * v1 / (2.0 * g);
+    impact[i + 1] = impact[i] + 2.0 * en * v1 / g;
+  }
+  json figures;
+  figures["first_impact_closed_form_s"] = t1;
+  figures["rest_time_closed_form_s"] = t1 + 2.0 * e * v1 / (g * (1.0 - e));
+  figures["apex_height_closed_form_m"] = apex_h;
+
+  // Apexes in the trace: samples higher than both neighbours, refined by the parabola through
+  // the three. The first sample is not an apex (the drop).
+  std::vector<double> found_t, found_h;
+  for (std::size_t i = 1; i + 1 < h.size() && static_cast<int>(found_t.size()) < count; ++i) {
+    if (h[i] > h[i - 1] && h[i] >= h[i + 1]) {
+      const double dt = trace.times[i] - trace.times[i - 1];
+      auto [t, y] = parabola_vertex(trace.times[i] - t0, dt, h[i - 1], h[i], h[i + 1]);
+      found_t.push_back(t);
+      found_h.push_back(y);
+    }
+  }
+  std::vector<double> rel_error, t_error;
+  double worst = 0.0, worst_t = 0.0;
+  for (std::size_t i = 0; i < found_t.size(); ++i) {
+    rel_error.push_back((found_h[i] - apex_h[i]) / apex_h[i]);
+    t_error.push_back(found_t[i] - apex_t[i]);
+    worst = std::max(worst, std::abs(rel_error.back()));
+    worst_t = std::max(worst_t, std::abs(t_error.back()));
+  }
+  figures["apexes_found"] = found_t.size();
+  figures["apex_height_fit_m"] = found_h;
+  figures["apex_height_rel_error"] = rel_error;
+  figures["apex_height_rel_error_max"] = worst;
+  figures["apex_time_error_max_s"] = worst_t;
+  if (static_cast<int>(found_t.size()) < count) {
+    figures["note"] =
+        "fewer apexes in the trace than asked for (sampling too coarse or trace too "
+        "short)";
+  }
+
+  // Impact times from the collisions of the body, when known: the first `count + 1` of them.
+  std::vector<double> impact_error;
+  double worst_impact = 0.0;
+  for (const ContactEvent& c : trace.contacts) {
+    if (c.body_a != body && c.body_b != body) continue;
+    if (static_cast<int>(impact_error.size()) > count) break;
+    impact_error.push_back(c.t - t0 - impact[impact_error.size()]);
+    worst_impact = std::max(worst_impact, std::abs(impact_error.back()));
+  }
+  if (!impact_error.empty()) {
+    figures["impact_time_error_s"] = impact_error;
+    figures["impact_time_error_max_s"] = worst_impact;
+  }
+  return figures;
+}
+
+// One-dimensional impact along `axis` (DESIGN.md §6): v1' = [m1 v1 + m2 v2 + m2 e (v2 - v1)] /
+// (m1 + m2) and symmetrically for v2'; the first sample must precede the impact and the last
+// follow it. Errors are relative to the approach speed |v1 - v2|.
+json compare_impact_1d(const json& spec, const Trace& trace, const std::string& where) {
+  std::size_t a = trace.body_index(spec_string(spec, where, "body_a"), where + "/body_a");
+  std::size_t b = trace.body_index(spec_string(spec, where, "body_b"), where + "/body_b");
+  if (a == b) throw InputError(where + "/body_b", "expected a body other than body_a");
+  const double e = spec_number(spec, where, "restitution");
+  const double m1 = spec_number(spec, where, "mass_a");
+  const double m2 = spec_number(spec, where, "mass_b");
+  const Vec3 axis = spec.contains("axis") ? spec_vec3(spec, where, "axis") : Vec3::UnitX();
+  if (!(e >= 0.0 && e <= 1.0)) throw InputError(where + "/restitution", "expected 0 <= e <= 1");
+  if (!(m1 > 0.0)) throw InputError(where + "/mass_a", "expected mass_a > 0");
+  if (!(m2 > 0.0)) throw InputError(where + "/mass_b", "expected mass_b > 0");
+
+  const double v1 = axis.dot(trace.samples.front()[a].v_W);
+  const double v2 = axis.dot(trace.samples.front()[b].v_W);
+  const double v1_after = (m1 * v1 + m2 * v2 + m2 * e * (v2 - v1)) / (m1 + m2);
+  const double v2_after = (m1 * v1 + m2 * v2 + m1 * e * (v1 - v2)) / (m1 + m2);
+  const double w1 = axis.dot(trace.samples.back()[a].v_W);
+  const double w2 = axis.dot(trace.samples.back()[b].v_W);
+  const double approach = std::abs(v1 - v2);
+  const double scale = approach > 0.0 ? approach : 1.0;
+
+  json figures;
+  figures["approach_speed"] = approach;
+  figures["velocity_a_closed_form"] = v1_after;
+  figures["velocity_b_closed_form"] = v2_after;
+  figures["velocity_a_final"] = w1;
+  figures["velocity_b_final"] = w2;
+  figures["velocity_a_rel_error"] = (w1 - v1_after) / scale;
+  figures["velocity_b_rel_error"] = (w2 - v2_after) / scale;
+  const double p0 = m1 * v1 + m2 * v2;
+  figures["momentum_error"] = (m1 * w1 + m2 * w2 - p0) / ((m1 + m2) * scale);
+  figures["restitution_fit"] = approach > 0.0 ? (w2 - w1) / (v1 - v2) : 0.0;
+  return figures;
+}
+
 }  // namespace
 
 std::vector<double> polynomial_fit(const std::vector<double>& t, const std::vector<double>& y,
@@ -258,9 +501,16 @@ json compare_with_reference(const json& spec, const Trace& trace, const std::str
     figures = compare_incline(spec, trace, where);
   } else if (type == "turntable") {
     figures = compare_turntable(spec, trace, where);
+  } else if (type == "slide_to_roll") {
+    figures = compare_slide_to_roll(spec, trace, where);
+  } else if (type == "bouncing_ball") {
+    figures = compare_bouncing_ball(spec, trace, where);
+  } else if (type == "impact_1d") {
+    figures = compare_impact_1d(spec, trace, where);
   } else {
-    throw InputError(where + "/type",
-                     "got \"" + type + "\", expected \"incline\" or \"turntable\"");
+    throw InputError(where + "/type", "got \"" + type +
+                                          "\", expected one of \"incline\", \"turntable\", "
+                                          "\"slide_to_roll\", \"bouncing_ball\", \"impact_1d\"");
   }
   figures["reference"] = type;
   return figures;

@@ -112,4 +112,44 @@ Trace read_trace_csv(const std::string& path) {
   return trace;
 }
 
+void read_events_csv(const std::string& path, Trace& trace) {
+  static constexpr const char* kEventsHeader = "t,kind,body_a,body_b,px,py,pz";
+  std::ifstream in(path);
+  if (!in) throw InputError(path, "cannot open events file");
+  std::string line;
+  if (!std::getline(in, line) || line.rfind(kEventsHeader, 0) != 0) {
+    throw InputError(path + ":1",
+                     std::string("expected the events header \"") + kEventsHeader + ",...\"");
+  }
+  std::vector<ContactEvent> contacts;
+  std::size_t line_number = 1;
+  while (std::getline(in, line)) {
+    ++line_number;
+    if (line.empty()) continue;
+    const std::string where = path + ":" + std::to_string(line_number);
+    std::vector<std::string> fields;
+    std::stringstream ss(line);
+    std::string field;
+    while (std::getline(ss, field, ',')) fields.push_back(field);
+    if (fields.size() < 7) throw InputError(where, "expected at least 7 columns");
+    double v[4];
+    for (int k = 0; k < 4; ++k) {
+      const std::string& f = fields[k == 0 ? 0 : k + 3];
+      auto result = std::from_chars(f.data(), f.data() + f.size(), v[k]);
+      if (result.ec != std::errc() || result.ptr != f.data() + f.size() || !std::isfinite(v[k])) {
+        throw InputError(where, "not a finite number: \"" + f + "\"");
+      }
+    }
+    ContactEvent c;
+    c.t = v[0];
+    c.body_a = trace.body_index(fields[2], where + " body_a");
+    c.body_b = trace.body_index(fields[3], where + " body_b");
+    c.p_W = Vec3(v[1], v[2], v[3]);
+    if (!contacts.empty() && c.t < contacts.back().t)
+      throw InputError(where, "time runs backwards");
+    contacts.push_back(c);
+  }
+  trace.contacts = std::move(contacts);
+}
+
 }  // namespace palpable

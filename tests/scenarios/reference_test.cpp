@@ -130,6 +130,170 @@ TEST_CASE("turntable reference: the closed-form orbit has zero error", "[scenari
   CHECK(g["path_deviation_max_m"].get<double>() > 1e-3);
 }
 
+TEST_CASE("slide_to_roll reference: the closed-form slide has zero error",
+          "[scenarios][reference]") {
+  // A solid ball (k = 2/5) launched at 3 m/s along x without spin, mu = 0.2: rolls from
+  // 2 v0 / (7 mu g) at 5 v0 / 7.
+  const double mu = 0.2, g = 9.81, v0 = 3.0, R = 0.1, k = 0.4;
+  const double t_roll = 2.0 * v0 / (7.0 * mu * g);
+  const double v_final = 5.0 * v0 / 7.0;
+  auto closed_form = [&](double t, double deceleration, double t_r) {
+    BodyState s;
+    const double tc = std::min(t, t_r);
+    const double x = v0 * tc - 0.5 * deceleration * tc * tc;
+    const double v = v0 - deceleration * tc;
+    s.x_W = Vec3(x + v * (t - tc), 0.0, R);
+    s.v_W = Vec3(v, 0.0, 0.0);
+    return s;
+  };
+  json spec{{"type", "slide_to_roll"},
+            {"body", "ball"},
+            {"friction", mu},
+            {"gravity", g},
+            {"radius", R},
+            {"k", k}};
+  Trace trace = single_body_trace("ball", 0.01, 200,
+                                  [&](double t) { return closed_form(t, mu * g, t_roll); });
+  json f = palpable::compare_with_reference(spec, trace, "test");
+  INFO(f.dump(2));
+  CHECK(f["mode"] == "slide_then_roll");
+  CHECK(f["roll_time_closed_form_s"].get<double>() == Approx(t_roll).epsilon(1e-14));
+  CHECK(f["final_speed_closed_form"].get<double>() == Approx(v_final).epsilon(1e-14));
+  CHECK(std::abs(f["roll_time_error_s"].get<double>()) < 1e-9);
+  CHECK(std::abs(f["final_speed_rel_error"].get<double>()) < 1e-9);
+  CHECK(std::abs(f["deceleration_rel_error"].get<double>()) < 1e-9);
+  CHECK(f["height_deviation_max_m"].get<double>() == 0.0);
+
+  // A backspin w0 = -v0/R about y gives slip 2 v0 along x: the general formula
+  // (v0 + k R w x n)/(1 + k) = (v0 - k v0)/(1 + k) = 3/7 v0, reached after 2 k v0/((1+k) mu g).
+  Trace spun = trace;
+  spun.samples[0][0].w_W = Vec3(0.0, -v0 / R, 0.0);
+  json b = palpable::compare_with_reference(spec, spun, "test");
+  CHECK(b["initial_slip_speed"].get<double>() == Approx(2.0 * v0).epsilon(1e-14));
+  CHECK(b["roll_time_closed_form_s"].get<double>() ==
+        Approx(2.0 * k * v0 / ((1.0 + k) * mu * g)).epsilon(1e-14));
+  CHECK(b["final_speed_closed_form"].get<double>() == Approx(3.0 * v0 / 7.0).epsilon(1e-14));
+  // The same launch state given as parameters instead of read from the first sample.
+  json given = spec;
+  given["angular_velocity"] = {0.0, -v0 / R, 0.0};
+  json c = palpable::compare_with_reference(given, trace, "test");
+  CHECK(c["initial_slip_speed"].get<double>() == b["initial_slip_speed"].get<double>());
+  given["velocity"] = "fast";
+  CHECK_THROWS_WITH(palpable::compare_with_reference(given, trace, "test"),
+                    Catch::Contains("test/velocity"));
+
+  // Friction 5 % too weak in the trace: slower deceleration, later rolling, same final speed
+  // (5 v0 / 7 does not depend on mu).
+  Trace weak = single_body_trace(
+      "ball", 0.01, 200, [&](double t) { return closed_form(t, 0.95 * mu * g, t_roll / 0.95); });
+  json w = palpable::compare_with_reference(spec, weak, "test");
+  INFO(w.dump(2));
+  CHECK(w["deceleration_rel_error"].get<double>() == Approx(-0.05).epsilon(1e-9));
+  CHECK(w["roll_time_error_s"].get<double>() == Approx(t_roll / 0.95 - t_roll).epsilon(1e-9));
+  CHECK(std::abs(w["final_speed_rel_error"].get<double>()) < 1e-9);
+
+  // Rolling 10 % early (the slip stops too soon): final speed 2 % high, roll time early.
+  Trace early = single_body_trace("ball", 0.01, 200,
+                                  [&](double t) { return closed_form(t, mu * g, 0.9 * t_roll); });
+  json r = palpable::compare_with_reference(spec, early, "test");
+  INFO(r.dump(2));
+  CHECK(r["final_speed_rel_error"].get<double>() ==
+        Approx(mu * g * 0.1 * t_roll / v_final).epsilon(1e-9));
+  CHECK(r["roll_time_error_s"].get<double>() == Approx(-0.1 * t_roll).epsilon(1e-9));
+}
+
+namespace {
+// Height of a ball dropped from h0 at rest with restitution e (closed form, piecewise parabola).
+double bouncing_height(double t, double h0, double e, double g) {
+  const double t1 = std::sqrt(2.0 * h0 / g);
+  if (t <= t1) return h0 - 0.5 * g * t * t;
+  double start = t1, v = e * g * t1;
+  while (t > start + 2.0 * v / g) {
+    start += 2.0 * v / g;
+    v *= e;
+    if (v < 1e-9) return 0.0;
+  }
+  const double s = t - start;
+  return v * s - 0.5 * g * s * s;
+}
+}  // namespace
+
+TEST_CASE("bouncing_ball reference: closed-form bounces have zero error",
+          "[scenarios][reference]") {
+  const double h0 = 1.0, e = 0.8, g = 9.81, R = 0.05;
+  json spec{{"type", "bouncing_ball"},
+            {"body", "ball"},
+            {"restitution", e},
+            {"gravity", g},
+            {"radius", R},
+            {"apexes", 3}};
+  auto trace_for = [&](double e_true) {
+    return single_body_trace("ball", 0.01, 400, [&](double t) {
+      BodyState s;
+      s.x_W = Vec3(0.0, 0.0, R + bouncing_height(t, h0, e_true, g));
+      return s;
+    });
+  };
+  Trace trace = trace_for(e);
+  const double t1 = std::sqrt(2.0 * h0 / g);
+  for (int n = 0; n < 4; ++n) {  // the impacts, as an events file would give them
+    double t = t1;
+    for (int i = 1; i <= n; ++i) t += 2.0 * std::pow(e, i) * t1;
+    trace.contacts.push_back(palpable::ContactEvent{t, 0, 0, Vec3::Zero()});
+  }
+  json f = palpable::compare_with_reference(spec, trace, "test");
+  INFO(f.dump(2));
+  CHECK(f["apexes_found"] == 3);
+  CHECK(f["apex_height_closed_form_m"][0].get<double>() == Approx(e * e * h0).epsilon(1e-14));
+  CHECK(f["apex_height_closed_form_m"][2].get<double>() ==
+        Approx(std::pow(e, 6) * h0).epsilon(1e-14));
+  CHECK(f["apex_height_rel_error_max"].get<double>() < 1e-9);
+  CHECK(f["apex_time_error_max_s"].get<double>() < 1e-9);
+  CHECK(f["impact_time_error_max_s"].get<double>() < 1e-12);
+  CHECK(f["rest_time_closed_form_s"].get<double>() ==
+        Approx(t1 * (1.0 + e) / (1.0 - e)).epsilon(1e-14));
+
+  // A ball with e = 0.78 instead of 0.8: the first apex is (0.78/0.8)^2 - 1 = -4.9 % low.
+  json w = palpable::compare_with_reference(spec, trace_for(0.78), "test");
+  INFO(w.dump(2));
+  CHECK(w["apex_height_rel_error"][0].get<double>() ==
+        Approx(std::pow(0.78 / 0.8, 2) - 1.0).epsilon(1e-6));
+  CHECK(w["apex_height_rel_error_max"].get<double>() > 0.04);
+}
+
+TEST_CASE("impact_1d reference: velocities after a 1-D impact", "[scenarios][reference]") {
+  const double m1 = 1.0, m2 = 3.0, e = 0.5, v1 = 2.0, v2 = -1.0;
+  const double w1 = (m1 * v1 + m2 * v2 + m2 * e * (v2 - v1)) / (m1 + m2);  // -1.375
+  const double w2 = (m1 * v1 + m2 * v2 + m1 * e * (v1 - v2)) / (m1 + m2);  // 0.125
+  auto make = [&](double w1_true, double w2_true) {
+    Trace trace;
+    trace.body_names = {"a", "b"};
+    for (int k = 0; k < 2; ++k) {
+      BodyState a, b;
+      a.v_W = Vec3(k == 0 ? v1 : w1_true, 0.0, 0.0);
+      b.v_W = Vec3(k == 0 ? v2 : w2_true, 0.0, 0.0);
+      trace.times.push_back(k);
+      trace.samples.push_back({a, b});
+    }
+    return trace;
+  };
+  json spec{{"type", "impact_1d"}, {"body_a", "a"}, {"body_b", "b"},
+            {"restitution", e},    {"mass_a", m1},  {"mass_b", m2}};
+  json f = palpable::compare_with_reference(spec, make(w1, w2), "test");
+  INFO(f.dump(2));
+  CHECK(f["velocity_a_closed_form"].get<double>() == Approx(-1.375).epsilon(1e-15));
+  CHECK(f["velocity_b_closed_form"].get<double>() == Approx(0.125).epsilon(1e-15));
+  CHECK(f["velocity_a_rel_error"].get<double>() == 0.0);
+  CHECK(f["velocity_b_rel_error"].get<double>() == 0.0);
+  CHECK(f["momentum_error"].get<double>() == 0.0);
+  CHECK(f["restitution_fit"].get<double>() == Approx(e).epsilon(1e-15));
+
+  // Body b 0.03 m/s too fast: 1 % of the approach speed, and momentum is no longer conserved.
+  json g = palpable::compare_with_reference(spec, make(w1, w2 + 0.03), "test");
+  CHECK(g["velocity_b_rel_error"].get<double>() == Approx(0.01).epsilon(1e-12));
+  CHECK(g["momentum_error"].get<double>() == Approx(0.0075).epsilon(1e-12));
+}
+
 TEST_CASE("bad reference specs name the parameter", "[scenarios][reference]") {
   Trace trace = single_body_trace("ball", 0.1, 10, [](double) { return BodyState{}; });
   CHECK_THROWS_WITH(
@@ -140,4 +304,25 @@ TEST_CASE("bad reference specs name the parameter", "[scenarios][reference]") {
                     Catch::Contains("no body \"cube\""));
   CHECK_THROWS_WITH(palpable::compare_with_reference(json{{"type", "pendulum"}}, trace, "r"),
                     Catch::Contains("r/type"));
+  CHECK_THROWS_WITH(palpable::compare_with_reference(json{{"type", "slide_to_roll"},
+                                                          {"body", "ball"},
+                                                          {"friction", -0.1},
+                                                          {"gravity", 9.81},
+                                                          {"radius", 0.1}},
+                                                     trace, "r"),
+                    Catch::Contains("r/friction"));
+  CHECK_THROWS_WITH(
+      palpable::compare_with_reference(
+          json{
+              {"type", "bouncing_ball"}, {"body", "ball"}, {"restitution", 1.5}, {"gravity", 9.81}},
+          trace, "r"),
+      Catch::Contains("r/restitution"));
+  CHECK_THROWS_WITH(palpable::compare_with_reference(json{{"type", "impact_1d"},
+                                                          {"body_a", "ball"},
+                                                          {"body_b", "ball"},
+                                                          {"restitution", 0.5},
+                                                          {"mass_a", 1.0},
+                                                          {"mass_b", 1.0}},
+                                                     trace, "r"),
+                    Catch::Contains("r/body_b"));
 }

@@ -63,3 +63,41 @@ TEST_CASE("malformed traces are rejected naming file and line", "[scenarios][tra
   CHECK_THROWS_WITH(palpable::read_trace_csv(path), Catch::StartsWith(path + ":1"));
   std::remove(path.c_str());
 }
+
+TEST_CASE("events CSV fills the trace's contacts, bad rows name file and line",
+          "[scenarios][trace]") {
+  palpable::Trace trace;
+  trace.body_names = {"block", "ramp"};
+  std::string path = "trace_test_events.csv";
+  {
+    std::ofstream out(path);
+    out << "t,kind,body_a,body_b,px,py,pz,nx,ny,nz,jx,jy,jz,approach_speed,energy_change,"
+           "centre_of_pressure\n"
+        << "0.25,collision,block,ramp,0.5,-0.125,3e-5,0,0,1,0,0,1,0.1,-0.01,0\n"
+        << "0.5,microcollision,ramp,block,0.1,0.2,0.3,0,0,1,0,0,1,0.01,0,1\n";
+  }
+  palpable::read_events_csv(path, trace);
+  REQUIRE(trace.contacts.size() == 2);
+  CHECK(trace.contacts[0].t == 0.25);
+  CHECK(trace.contacts[0].body_a == 0);
+  CHECK(trace.contacts[0].body_b == 1);
+  CHECK(trace.contacts[0].p_W == Vec3(0.5, -0.125, 3e-5));
+  CHECK(trace.contacts[1].body_a == 1);
+  {
+    std::ofstream out(path);
+    out << "t,kind,body_a,body_b,px,py,pz\n0.1,collision,block,table,0,0,0\n";
+  }
+  CHECK_THROWS_WITH(palpable::read_events_csv(path, trace),
+                    Catch::StartsWith(path + ":2") && Catch::Contains("table"));
+  {
+    std::ofstream out(path);
+    out << "t,kind,body_a,body_b,px,py,pz\n0.1,collision,block,ramp,0,zero,0\n";
+  }
+  CHECK_THROWS_WITH(palpable::read_events_csv(path, trace), Catch::StartsWith(path + ":2"));
+  {
+    std::ofstream out(path);
+    out << palpable::kTraceHeader << "\n";
+  }
+  CHECK_THROWS_WITH(palpable::read_events_csv(path, trace), Catch::StartsWith(path + ":1"));
+  std::remove(path.c_str());
+}

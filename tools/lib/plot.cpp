@@ -1,0 +1,355 @@
+#include "tools/lib/plot.hpp"
+
+#include "core/check.hpp"
+
+#include <Eigen/Geometry>
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iterator>
+#include <limits>
+#include <sstream>
+
+extern char** environ;
+
+namespace palpable::tools {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// A temporary directory removed with everything in it when it goes out of scope.
+class TempDir {
+ public:
+  TempDir() {
+    std::string pattern = (fs::temp_directory_path() / "palpable-plot-XXXXXX").string();
+    if (::mkdtemp(pattern.data()) == nullptr) {
+      throw std::runtime_error("cannot create a temporary directory " + pattern);
+    }
+    path_ = pattern;
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  ~TempDir() {
+    std::error_code ignored;
+    fs::remove_all(path_, ignored);
+  }
+  fs::path path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+// gnuplot string literal (single quotes; a quote is doubled).
+std::string quoted(const std::string& text) {
+  std::string out = "'";
+  for (char c : text) {
+    out += c;
+    if (c == '\'') out += '\'';
+  }
+  return out + "'";
+}
+
+double number(const json& spec, const std::string& key, double fallback) {
+  auto it = spec.find(key);
+  if (it == spec.end()) return fallback;
+  if (!it->is_number()) {
+    throw InputError("--param " + key, "got " + it->dump() + ", expected a number");
+  }
+  return it->get<double>();
+}
+
+Vec3 vector3(const json& spec, const std::string& key, const Vec3& fallback) {
+  auto it = spec.find(key);
+  if (it == spec.end()) return fallback;
+  if (!it->is_array() || it->size() != 3 || !(*it)[0].is_number() || !(*it)[1].is_number() ||
+      !(*it)[2].is_number()) {
+    throw InputError("--param " + key, "got " + it->dump() + ", expected [x, y, z]");
+  }
+  Vec3 v((*it)[0].get<double>(), (*it)[1].get<double>(), (*it)[2].get<double>());
+  if (!(v.norm() > 0.0)) throw InputError("--param " + key, "expected a non-zero vector");
+  return v.normalized();
+}
+
+std::string body_of(const json& spec) {
+  auto it = spec.find("body");
+  if (it == spec.end() || !it->is_string()) {
+    throw InputError("--param body", "expected the body's name");
+  }
+  return it->get<std::string>();
+}
+
+std::string terminal(int height) {
+  return "set terminal pngcairo size 1100," + std::to_string(height) +
+         " enhanced font 'DejaVu Sans,11' linewidth 1.5\n";
+}
+
+void put(std::ostream& out, double x) {
+  out << std::setprecision(12) << x;
+}
+
+// Series: positions and velocities of one body against time, two panels.
+std::string series_plot(const Trace& trace, const std::string& body_name, const fs::path& dir) {
+  std::string name = body_name;
+  if (name.empty()) {
+    if (trace.body_names.size() != 1) {
+      throw InputError("--body", "required: the trace has several bodies");
+    }
+    name = trace.body_names.front();
+  }
+  const std::size_t body = trace.body_index(name, "--body");
+  std::ofstream data(dir / "data.dat");
+  for (std::size_t k = 0; k < trace.times.size(); ++k) {
+    const BodyState& s = trace.samples[k][body];
+    put(data, trace.times[k]);
+    for (double v : {s.x_W.x(), s.x_W.y(), s.x_W.z(), s.v_W.x(), s.v_W.y(), s.v_W.z()}) {
+      data << ' ';
+      put(data, v);
+    }
+    data << '\n';
+  }
+  std::ostringstream gp;
+  gp << "set multiplot layout 2,1 title " << quoted("Body \"" + name + "\": centre of mass")
+     << "\nset grid\nset key outside right\n"
+     << "set title 'Position (world frame)'\nset xlabel 't [s]'\nset ylabel 'position [m]'\n"
+     << "plot 'data.dat' u 1:2 w l t 'x', '' u 1:3 w l t 'y', '' u 1:4 w l t 'z'\n"
+     << "set title 'Velocity (world frame)'\nset ylabel 'velocity [m/s]'\n"
+     << "plot 'data.dat' u 1:5 w l t 'v_x', '' u 1:6 w l t 'v_y', '' u 1:7 w l t 'v_z'\n"
+     << "unset multiplot\n";
+  return gp.str();
+}
+
+// Top view: every body's x-y path (one data block per body), start marked.
+std::string top_plot(const Trace& trace, const fs::path& dir) {
+  std::ofstream data(dir / "data.dat");
+  for (std::size_t b = 0; b < trace.body_names.size(); ++b) {
+    if (b > 0) data << "\n\n";
+    for (std::size_t k = 0; k < trace.times.size(); ++k) {
+      put(data, trace.samples[k][b].x_W.x());
+      data << ' ';
+      put(data, trace.samples[k][b].x_W.y());
+      data << '\n';
+    }
+  }
+  std::ostringstream gp;
+  gp << "set title 'Top view: paths of the centres of mass'\nset grid\nset size ratio -1\n"
+     << "set xlabel 'x [m]'\nset ylabel 'y [m]'\nset key outside right\nplot ";
+  for (std::size_t b = 0; b < trace.body_names.size(); ++b) {
+    gp << (b > 0 ? ", " : "") << "'data.dat' index " << b << " w l lc " << b + 1 << " t "
+       << quoted(trace.body_names[b]) << ", '' index " << b << " every ::0::0 w p pt 7 lc " << b + 1
+       << " notitle";
+  }
+  gp << "\n";
+  return gp.str();
+}
+
+// Incline: along-slope position and velocity against a = g (sin θ − μ cos θ) (DESIGN.md §6),
+// stopping at t* = v0 / (-a) when decelerating, at rest throughout when it sticks.
+std::string incline_plot(const Trace& trace, const json& spec, const fs::path& dir) {
+  const std::size_t body = trace.body_index(body_of(spec), "--param body");
+  const double theta = number(spec, "angle_deg", std::nan("")) * kPi / 180.0;
+  const double mu = number(spec, "friction", std::nan(""));
+  const double g = number(spec, "gravity", std::nan(""));
+  const double v0 = number(spec, "initial_speed", 0.0);
+  if (!std::isfinite(theta)) throw InputError("--param angle_deg", "expected a number");
+  if (!std::isfinite(mu)) throw InputError("--param friction", "expected a number");
+  if (!std::isfinite(g)) throw InputError("--param gravity", "expected a number");
+  const Vec3 down = vector3(spec, "down_slope", Vec3::Constant(std::nan("")));
+  if (!down.allFinite()) throw InputError("--param down_slope", "expected [x, y, z]");
+  double a = g * (std::sin(theta) - mu * std::cos(theta));
+  if (a <= 0.0 && v0 <= 0.0) a = 0.0;  // sticks
+  const double t_stop = a < 0.0 && v0 > 0.0 ? v0 / -a : std::numeric_limits<double>::infinity();
+  const double t0 = trace.times.front();
+  const Vec3 x0 = trace.samples.front()[body].x_W;
+  std::ofstream data(dir / "data.dat");
+  for (std::size_t k = 0; k < trace.times.size(); ++k) {
+    const double t = trace.times[k] - t0;
+    const BodyState& s = trace.samples[k][body];
+    const double tc = std::min(t, t_stop);
+    for (double v : {trace.times[k], (s.x_W - x0).dot(down), s.v_W.dot(down),
+                     v0 * tc + 0.5 * a * tc * tc, t < t_stop ? v0 + a * t : 0.0}) {
+      put(data, v);
+      data << ' ';
+    }
+    data << '\n';
+  }
+  std::ostringstream title;
+  title << std::setprecision(4) << "Block \"" << body_of(spec) << "\" on a " << theta * 180.0 / kPi
+        << "° incline, μ = " << mu << ", v_0 = " << v0 << " m/s: a = g (sin θ − μ cos θ) = " << a
+        << " m/s²";
+  if (std::isfinite(t_stop)) title << ", stops at t* = " << std::setprecision(5) << t_stop << " s";
+  std::ostringstream gp;
+  gp << "set multiplot layout 3,1 title " << quoted(title.str()) << "\nset grid\n"
+     << "set key bottom right\nset xlabel 't [s]'\n"
+     << "set title 'Along-slope position'\nset ylabel 's [m]'\n"
+     << "plot 'data.dat' u 1:4 w l lw 3 lc rgb '#a0a0a0' t 'closed form', "
+        "'' u 1:2 w l lc rgb '#c00000' t 'simulation'\n"
+     << "set title 'Along-slope velocity (sampled: a microcollision steps it by about a_t τ)'\n"
+     << "set ylabel 'v [m/s]'\n"
+     << "plot 'data.dat' u 1:5 w l lw 3 lc rgb '#a0a0a0' t 'closed form', "
+        "'' u 1:3 w l lc rgb '#c00000' t 'simulation'\n"
+     << "set title 'Position error: simulation − closed form'\nset ylabel 'Δs [m]'\n"
+     << "set format y '%.1e'\n"
+     << "plot 'data.dat' u 1:($2-$4) w l lc rgb '#c00000' t 'Δs'\n"
+     << "unset multiplot\n";
+  return gp.str();
+}
+
+// Turntable: the ball's path and the circle of radius |v0| / (k Ω / (1 + k)) around
+// x0 + axis × v0 / rate (DESIGN.md §6), in the plane of the platter (axis z).
+std::string turntable_plot(const Trace& trace, const json& spec, const fs::path& dir) {
+  const std::size_t body = trace.body_index(body_of(spec), "--param body");
+  const double omega = number(spec, "omega", std::nan(""));
+  if (!std::isfinite(omega) || omega == 0.0) {
+    throw InputError("--param omega", "expected a non-zero number");
+  }
+  const double k = number(spec, "k", 0.4);
+  if (!(k > 0.0)) throw InputError("--param k", "expected k > 0");
+  const Vec3 axis = vector3(spec, "axis", Vec3::UnitZ());
+  if (std::abs(axis.z()) < 1.0 - 1e-12) {
+    throw InputError("--param axis", "the turntable plot is a top view: expected axis [0, 0, ±1]");
+  }
+  const double rate = k / (1.0 + k) * omega;
+  const BodyState& first = trace.samples.front()[body];
+  const Vec3 v0 = first.v_W - axis * axis.dot(first.v_W);
+  const Vec3 centre = first.x_W + axis.cross(v0) / rate;
+  const double radius = v0.norm() / rate;
+  std::ofstream data(dir / "data.dat");
+  for (std::size_t i = 0; i < trace.times.size(); ++i) {
+    put(data, trace.samples[i][body].x_W.x());
+    data << ' ';
+    put(data, trace.samples[i][body].x_W.y());
+    data << '\n';
+  }
+  data << "\n\n";
+  for (int i = 0; i <= 720; ++i) {
+    const double phi = 2.0 * kPi * i / 720.0;
+    put(data, centre.x() + radius * std::cos(phi));
+    data << ' ';
+    put(data, centre.y() + radius * std::sin(phi));
+    data << '\n';
+  }
+  data << "\n\n";
+  put(data, centre.x());
+  data << ' ';
+  put(data, centre.y());
+  data << '\n';
+  std::ostringstream title;
+  title << std::setprecision(4) << "Ball \"" << body_of(spec) << "\" on a platter at Ω = " << omega
+        << " rad/s: circle at kΩ/(1+k) = " << rate << " rad/s, radius " << radius << " m ("
+        << trace.times.back() - trace.times.front() << " s)";
+  std::ostringstream gp;
+  gp << "set title " << quoted(title.str()) << "\nset grid\nset size ratio -1\n"
+     << "set xlabel 'x [m]'\nset ylabel 'y [m]'\nset key outside right\n"
+     << "plot 'data.dat' index 1 w l lw 4 lc rgb '#a0a0a0' t 'closed-form circle', "
+        "'' index 2 w p pt 1 ps 2 lc rgb '#a0a0a0' t 'closed-form centre', "
+        "'' index 0 w l lc rgb '#c00000' t 'simulation', "
+        "'' index 0 every ::0::0 w p pt 7 lc rgb '#c00000' t 'start'\n";
+  return gp.str();
+}
+
+// Runs `program script` in `dir`; stderr goes to dir/gnuplot.log. Returns the exit status.
+int run_gnuplot(const std::string& program, const fs::path& dir) {
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  const std::string log = (dir / "gnuplot.log").string();
+  posix_spawn_file_actions_addopen(&actions, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&actions, 1, 2);
+  std::string script = (dir / "plot.gp").string();
+  std::string prog = program;
+  char* argv[] = {prog.data(), script.data(), nullptr};
+  pid_t pid = 0;
+  const int spawned = ::posix_spawn(&pid, program.c_str(), &actions, nullptr, argv, environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (spawned != 0) throw std::runtime_error("cannot start " + program);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0) {
+    if (errno != EINTR) throw std::runtime_error("waiting for gnuplot failed");
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
+}
+
+}  // namespace
+
+PlotKind parse_plot_kind(const std::string& text) {
+  if (text == "series") return PlotKind::kSeries;
+  if (text == "top") return PlotKind::kTop;
+  if (text == "incline") return PlotKind::kIncline;
+  if (text == "turntable") return PlotKind::kTurntable;
+  throw InputError("--kind", "got \"" + text + "\", expected series, top, incline or turntable");
+}
+
+std::string find_program(const std::string& name) {
+  if (name.find('/') != std::string::npos) {
+    return ::access(name.c_str(), X_OK) == 0 ? name : std::string();
+  }
+  const char* path = std::getenv("PATH");
+  std::stringstream dirs(path ? path : "/usr/bin:/bin");
+  std::string dir;
+  while (std::getline(dirs, dir, ':')) {
+    const std::string candidate = (dir.empty() ? std::string(".") : dir) + "/" + name;
+    if (::access(candidate.c_str(), X_OK) == 0) return candidate;
+  }
+  return {};
+}
+
+void plot_trace(const PlotOptions& options) {
+  if (options.out_path.empty()) throw InputError("--out", "required: the PNG to write");
+  json spec;
+  if (options.kind == PlotKind::kIncline || options.kind == PlotKind::kTurntable) {
+    spec = reference_spec(options.reference);
+    const std::string expected = options.kind == PlotKind::kIncline ? "incline" : "turntable";
+    if (spec["type"] != expected) {
+      throw InputError("--reference", "got " + spec["type"].dump() + ", expected \"" + expected +
+                                          "\" for --kind " + expected);
+    }
+  }
+  Trace trace = read_trace_csv(options.trace_path);
+  const std::string program = find_program(options.gnuplot);
+  if (program.empty()) {
+    throw std::runtime_error("gnuplot not found (looked for \"" + options.gnuplot +
+                             "\" on PATH): install the Debian package gnuplot-nox "
+                             "(tools/setup does)");
+  }
+  TempDir dir;
+  std::string script;
+  switch (options.kind) {
+    case PlotKind::kSeries: script = series_plot(trace, options.body, dir.path()); break;
+    case PlotKind::kTop: script = top_plot(trace, dir.path()); break;
+    case PlotKind::kIncline: script = incline_plot(trace, spec, dir.path()); break;
+    case PlotKind::kTurntable: script = turntable_plot(trace, spec, dir.path()); break;
+  }
+  const fs::path out = fs::absolute(options.out_path);
+  const fs::path temp_png = out.string() + ".tmp-" + std::to_string(::getpid()) + ".png";
+  {
+    std::ofstream gp(dir.path() / "plot.gp");
+    gp << terminal(options.kind == PlotKind::kIncline ? 1100 : 800)
+       << "set encoding utf8\nset output " << quoted(temp_png.string()) << "\n"
+       << "cd " << quoted(dir.path().string()) << "\n"
+       << script << "unset output\n";
+    if (!gp) throw std::runtime_error("cannot write the gnuplot script in " + dir.path().string());
+  }
+  const int status = run_gnuplot(program, dir.path());
+  std::ifstream log_in(dir.path() / "gnuplot.log");
+  std::string messages((std::istreambuf_iterator<char>(log_in)), std::istreambuf_iterator<char>());
+  std::error_code ignored;
+  if (status != 0 || !fs::exists(temp_png) || fs::file_size(temp_png, ignored) == 0) {
+    fs::remove(temp_png, ignored);
+    throw std::runtime_error("gnuplot failed (status " + std::to_string(status) + "): " + messages);
+  }
+  fs::rename(temp_png, out);
+}
+
+}  // namespace palpable::tools

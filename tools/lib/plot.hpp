@@ -1,0 +1,38 @@
+#pragma once
+// `palpable plot`: PNG pictures of a trace, drawn by gnuplot (Debian package gnuplot-nox, which
+// tools/setup installs). The data and a gnuplot script go to a temporary directory; the PNG is
+// written beside the target and renamed over it only when gnuplot succeeded, so a failed plot
+// leaves no partial picture.
+#include "tools/lib/compare.hpp"
+
+#include <string>
+
+namespace palpable::tools {
+
+enum class PlotKind {
+  kSeries,     // one body's position and velocity components against time
+  kTop,        // top view (x-y) of every body's path
+  kIncline,    // along-slope position and velocity against the incline closed form
+  kTurntable,  // the ball's path against the closed-form circle
+};
+
+struct PlotOptions {
+  std::string trace_path;
+  PlotKind kind = PlotKind::kSeries;
+  std::string body;                 // kSeries: required unless the trace has one body
+  ReferenceOptions reference;       // kIncline, kTurntable
+  std::string out_path;             // the PNG
+  std::string gnuplot = "gnuplot";  // program name or path
+};
+
+// Parses "series", "top", "incline", "turntable"; throws InputError naming --kind otherwise.
+PlotKind parse_plot_kind(const std::string& text);
+
+// The program's full path if it is found (a path, or on PATH), else empty.
+std::string find_program(const std::string& name);
+
+// Draws the plot. Throws InputError for bad input, std::runtime_error if gnuplot is missing or
+// fails (its messages included).
+void plot_trace(const PlotOptions& options);
+
+}  // namespace palpable::tools
