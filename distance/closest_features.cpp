@@ -290,6 +290,11 @@ std::vector<Vec3> contact_feature(const PosedPiece& p, Feature feature, const Ve
       edges.push_back(q->neighbor.index);
     }
   }
+  if (best_face < 0) {
+    // No face scored (a non-finite direction): the closest point is all we can say.
+    points.push_back(closest_W);
+    return points;
+  }
   const int h0 = m.face_half_edge(best_face);
   int h = h0;
   bool face_within = true;

@@ -291,3 +291,28 @@ TEST_CASE("a ball sliding on a compound's floor into its wall bounces off the wa
   CHECK(s.v_W.x() == Approx(-5.0).epsilon(1e-9));  // e = 1, mu = 0: an elastic bounce
   CHECK(s.x_W.x() < 0.45 - 0.05);
 }
+
+TEST_CASE("a tall block sliding fast tips about its front edge without a retry storm",
+          "[scheduler][tipping]") {
+  // Friction's line of action through the centre of mass meets the ground 0.2 x 0.5 = 0.1 m
+  // ahead of the foot, outside the 0.02 m half-width base: the block tips (DESIGN.md §4), and the
+  // contact moves to the edge it tips about rather than back under the centre of mass.
+  World world;
+  world.default_material = Material{0.5, 0.0};
+  world.add(ground());
+  Body block;
+  block.name = "block";
+  block.shape = std::make_shared<const Shape>(ConvexPolyhedron::box(Vec3(0.02, 0.02, 0.2)));
+  block.mass = mass_properties_from_mass(*block.shape, 1.0);
+  block.state.x_W = Vec3(0, 0, 0.2 + 5e-5);
+  block.state.v_W = Vec3(3.0, 0, 0);
+  world.add(block);
+  Simulation sim(world, SimulationOptions{});
+  sim.run_until(0.3, nullptr);
+  CHECK(sim.stats().retry_limit_hits == 0);
+  CHECK(sim.stats().retries < 10);
+  CHECK(sim.stats().penetrations == 0);
+  // It has pitched forward: rotation about +y (the x-motion's tipping axis).
+  const BodyState s = sim.state_at(BodyId{1}, 0.3);
+  CHECK(s.q_WM.toRotationMatrix()(2, 2) < std::cos(0.1));
+}
