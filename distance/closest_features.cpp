@@ -54,6 +54,22 @@ void ShapeGeometry::add_piece(const Shape& shape, const Vec3& p_M, const Mat3& R
 
 namespace {
 
+// Status and distance from a signed distance d (negative: overlap by -d): penetration is never
+// reported as a distance.
+void set_signed_distance(DistanceResult& r, double d) {
+  if (d > 0.0) {
+    r.status = ContactStatus::kSeparated;
+    r.distance = d;
+  } else if (d == 0.0) {
+    r.status = ContactStatus::kTouching;
+    r.distance = 0.0;
+  } else {
+    r.status = ContactStatus::kPenetrating;
+    r.distance = 0.0;
+    r.penetration_depth = -d;
+  }
+}
+
 using Piece = ShapeGeometry::Piece;
 using PieceKind = ShapeGeometry::PieceKind;
 
@@ -109,17 +125,7 @@ void halfspace_vs_convex(const PosedPiece& half, const PosedPiece& other, Featur
   }
   const double d = n_W.dot(deepest_W) - offset_W;
   r.n_W = n_W;
-  if (d > 0.0) {
-    r.status = ContactStatus::kSeparated;
-    r.distance = d;
-  } else if (d == 0.0) {
-    r.status = ContactStatus::kTouching;
-    r.distance = 0.0;
-  } else {
-    r.status = ContactStatus::kPenetrating;
-    r.distance = 0.0;
-    r.penetration_depth = -d;
-  }
+  set_signed_distance(r, d);
   r.p1_W = deepest_W;
   r.p2_W = deepest_W - d * n_W;
 }
@@ -183,17 +189,7 @@ DistanceResult piece_pair(const PosedPiece& a, const PosedPiece& b, FeaturePair&
     return r;
   }
   // With a sphere, a core distance of zero means the centre is on the other surface: overlap.
-  if (d > 0.0) {
-    r.status = ContactStatus::kSeparated;
-    r.distance = d;
-  } else if (d == 0.0) {
-    r.status = ContactStatus::kTouching;
-    r.distance = 0.0;
-  } else {
-    r.status = ContactStatus::kPenetrating;
-    r.distance = 0.0;
-    r.penetration_depth = -d;
-  }
+  set_signed_distance(r, d);
   return r;
 }
 
