@@ -240,9 +240,9 @@ struct Simulation::Impl {
   }
 
   // Recomputes the swept box of `id` from time t and brings its pairs up to date: pairs whose
-  // boxes overlap exist (never two non-dynamic bodies), others are dropped; every pair of `id`
-  // is then re-bounded. Brute force over the bodies: O(n) per refresh.
-  void refresh_body(BodyId id, double t) {
+  // boxes overlap exist (never two non-dynamic bodies), others are dropped. Brute force over the
+  // bodies: O(n) per refresh. The pairs are not re-bounded here (see refresh_body).
+  void refresh_broad_phase(BodyId id, double t) {
     refresh_box(id, t);
     schedule_horizon(id);
     const Body& self = body(id);
@@ -260,9 +260,29 @@ struct Simulation::Impl {
         remove_pair(it->second);
       }
     }
-    // Copy: rebound never changes the pair list.
-    std::vector<std::uint32_t> list = bodies[id.index].pairs;
-    for (std::uint32_t index : list) rebound(index, t);
+  }
+
+  // Re-bounds every pair of `id` except the one with `skip` (rebound never changes the lists).
+  void rebound_pairs(BodyId id, double t, BodyId skip = BodyId{}) {
+    for (std::uint32_t index : bodies[id.index].pairs) {
+      const PairRuntime& p = pairs[index];
+      if (p.a != skip && p.b != skip) rebound(index, t);
+    }
+  }
+
+  // A body's horizon ran out: new box, pairs, bounds.
+  void refresh_body(BodyId id, double t) {
+    refresh_broad_phase(id, t);
+    rebound_pairs(id, t);
+  }
+
+  // After a collision of a and b: both bodies' boxes and pairs, then every pair of either body
+  // re-bounded once (the pair (a, b) itself only once).
+  void refresh_after_collision(BodyId a, BodyId b, double t) {
+    refresh_broad_phase(a, t);
+    refresh_broad_phase(b, t);
+    rebound_pairs(a, t);
+    rebound_pairs(b, t, a);
   }
 
   // ---------------------------------------------------------------- contacts
@@ -649,8 +669,7 @@ struct Simulation::Impl {
         CollisionRecord record = resolve(p, c, t);
         if (observer) observer->on_collision(record);
         const BodyId a = p.a, b = p.b;  // `p` may move when pairs are created below
-        refresh_body(a, t);
-        refresh_body(b, t);
+        refresh_after_collision(a, b, t);
         return;
       }
     }
@@ -714,7 +733,10 @@ Simulation::Simulation(World world, SimulationOptions options)
       }
     }
   }
-  for (std::uint32_t i = 0; i < world_.bodies.size(); ++i) im.refresh_body(BodyId{i}, 0.0);
+  for (std::uint32_t i = 0; i < world_.bodies.size(); ++i) im.refresh_broad_phase(BodyId{i}, 0.0);
+  for (std::uint32_t index = 0; index < im.pairs.size(); ++index) {
+    if (im.pairs[index].live) im.rebound(index, 0.0);  // each pair once
+  }
   im.schedule_sample();
 }
 
