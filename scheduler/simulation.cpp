@@ -587,21 +587,28 @@ struct Simulation::Impl {
   }
 
   // The next event time of a pair from its closest features at time t.
+  // `known`: the contact check_pair already made of this very query and found not approaching
+  // (saves making it again); null to make it here.
   double next_check_time(const PairRuntime& p, const BodyState& s1, const BodyState& s2,
-                         const DistanceResult& dr, double t) {
+                         const DistanceResult& dr, double t, const Contact* known = nullptr) {
     const double floor = std::max(settings().toi_min_progress_s, 1e-12 * std::max(1.0, t));
     if (dr.status == ContactStatus::kFailed) {
       ++sim.stats_.distance_failures;
       return t + floor;
     }
     bool resting = false;  // within the envelope, neither approaching nor accelerated together
-    const DistanceResult& contact = contact_result(p, s1, s2, dr);
-    if (contact.status == ContactStatus::kPenetrating ||
-        contact.distance <= settings().envelope_m) {
-      Contact c = make_contact(p, s1, s2, contact, /*with_patch=*/false);
-      if (approaching(c)) return t;
-      if (contact.status == ContactStatus::kPenetrating) return t + floor;
-      resting = c.g_n == 0.0;
+    if (known) {
+      if (dr.status == ContactStatus::kPenetrating) return t + floor;
+      resting = known->g_n == 0.0;
+    } else {
+      const DistanceResult& contact = contact_result(p, s1, s2, dr);
+      if (contact.status == ContactStatus::kPenetrating ||
+          contact.distance <= settings().envelope_m) {
+        const Contact c = make_contact(p, s1, s2, contact, /*with_patch=*/false);
+        if (approaching(c)) return t;
+        if (contact.status == ContactStatus::kPenetrating) return t + floor;
+        resting = c.g_n == 0.0;
+      }
     }
     const Body& b1 = body(p.a);
     const Body& b2 = body(p.b);
@@ -672,6 +679,8 @@ struct Simulation::Impl {
         refresh_after_collision(a, b, t);
         return;
       }
+      schedule_pair(index, next_check_time(p, s1, s2, dr, t, &c));
+      return;
     }
     schedule_pair(index, next_check_time(p, s1, s2, dr, t));
   }
