@@ -3,6 +3,7 @@
 // ball), the sphere; recentring, principal frames, compounds (parallel-axis theorem), bad input.
 // Run with -s to see the measured errors (CAPTURE).
 #include "core/mass_properties.hpp"
+#include "core_test_support.hpp"
 
 #include "core/check.hpp"
 
@@ -17,6 +18,8 @@
 using namespace palpable;
 
 namespace {
+
+using palpable::test::input_error;
 
 constexpr double kPi = 3.14159265358979323846;
 
@@ -74,15 +77,6 @@ Quat random_rotation(std::mt19937_64& rng) {
 
 // Errors printed in scientific notation (CAPTURE's fixed notation shows 1e-16 as 0.0).
 #define CAPTURE_ERROR(x) INFO(#x " = " << std::scientific << std::setprecision(3) << (x))
-
-std::string input_error(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "accepted";
-}
 
 // Exact regular n-gon prism (circumradius R, half-height h), unit density: area
 // A = n R^2 sin(t) / 2, polar moment J = n R^4 sin(t) (2 + cos(t)) / 12 with t = 2 pi / n

@@ -1,6 +1,7 @@
 // Shapes: half-edge invariants of built polyhedra, support points and radii against brute force,
 // bounding boxes, and validation of bad sizes.
 #include "core/shape.hpp"
+#include "core_test_support.hpp"
 
 #include "core/check.hpp"
 
@@ -14,6 +15,8 @@
 using namespace palpable;
 
 namespace {
+
+using palpable::test::input_error;
 
 Vec3 brute_support(const ConvexPolyhedron& p, const Vec3& d) {
   double best = -kInfinity;
@@ -35,15 +38,6 @@ Vec3 random_unit(std::mt19937_64& rng) {
 Quat random_rotation(std::mt19937_64& rng) {
   std::normal_distribution<double> g(0.0, 1.0);
   return Quat(g(rng), g(rng), g(rng), g(rng)).normalized();
-}
-
-std::string input_error(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "accepted";
 }
 
 }  // namespace

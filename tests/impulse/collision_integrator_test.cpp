@@ -4,6 +4,7 @@
 // independent fixed-step RK4 integration of a 3-D contact whose slip direction curves.
 #include "impulse/collision_integrator.hpp"
 #include "impulse/collision_matrix.hpp"
+#include "impulse_test_support.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -16,17 +17,10 @@
 namespace palpable {
 namespace {
 
+using palpable::test::params_for;
+
 const RestitutionLaw kLaws[] = {RestitutionLaw::kNewton, RestitutionLaw::kPoisson,
                                 RestitutionLaw::kStronge};
-
-CollisionParameters params_for(double mu, double e, RestitutionLaw law, double tol = 1e-9) {
-  CollisionParameters params;
-  params.friction = mu;
-  params.restitution = e;
-  params.law = law;
-  params.tolerance = tol;
-  return params;
-}
 
 // The thin rod of DESIGN.md §4 (m = 1, L = 1, leaning 45 degrees, lower end on fixed ground).
 Mat3 rod_K() {

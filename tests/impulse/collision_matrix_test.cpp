@@ -3,6 +3,7 @@
 // positive definiteness, conservation of momentum and angular momentum by apply_impulse,
 // infinite-mass (fixed, kinematic) bodies and the contact frame.
 #include "impulse/collision_matrix.hpp"
+#include "impulse_test_support.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -14,13 +15,7 @@
 namespace palpable {
 namespace {
 
-CollisionParameters params_for(double mu, double e, RestitutionLaw law) {
-  CollisionParameters params;
-  params.friction = mu;
-  params.restitution = e;
-  params.law = law;
-  return params;
-}
+using palpable::test::params_for;
 
 TEST_CASE("solid sphere on fixed ground: K_c = diag(7/2, 7/2, 1)", "[impulse][matrix]") {
   const double m = 1.0, R = 0.1;

@@ -3,6 +3,7 @@
 // shows Mirtich's reversal rule creeping in the band mu/2 < tan(theta) <= mu while the drift-free
 // rule does not (DESIGN.md §4, "Continuous contact").
 #include "impulse/microcollision.hpp"
+#include "impulse_test_support.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -15,13 +16,7 @@
 namespace palpable {
 namespace {
 
-CollisionParameters params_for(double mu, double e, RestitutionLaw law) {
-  CollisionParameters params;
-  params.friction = mu;
-  params.restitution = e;
-  params.law = law;
-  return params;
-}
+using palpable::test::params_for;
 
 TEST_CASE("v_micro = sqrt(2 g_n envelope) unless set, the test has a little slack",
           "[impulse][micro]") {
