@@ -18,7 +18,6 @@ enum class EventKind : std::uint8_t {
   kPairCheck = 0,  // a pair's conservative bound (or exact time of impact) expires
   kHorizon = 1,    // a body's broad-phase horizon expires: refresh its swept box and pairs
   kSample = 2,     // write an output sample (extrapolated, commits nothing)
-  kEnd = 3,        // the end of the simulation
 };
 
 struct Event {

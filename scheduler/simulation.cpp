@@ -790,7 +790,6 @@ void Simulation::run_until(double t_end, SimulationObserver* observer,
         im.schedule_sample();
         break;
       }
-      case EventKind::kEnd: break;
     }
     if (progress && ++since_progress >= 4096) {
       since_progress = 0;

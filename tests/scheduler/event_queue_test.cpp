@@ -31,13 +31,13 @@ TEST_CASE("events pop in (time, kind, ids, sequence) order", "[scheduler][queue]
     q.push(make_event(1.0, EventKind::kSample, 0, 1));
     q.push(make_event(1.0, EventKind::kPairCheck, 2, 3));
     q.push(make_event(1.0, EventKind::kPairCheck, 1, 5));
-    q.push(make_event(0.5, EventKind::kEnd, 9, 9));
+    q.push(make_event(0.5, EventKind::kSample, 9, 9));
     q.push(make_event(1.0, EventKind::kPairCheck, 1, 4));
     q.push(make_event(1.0, EventKind::kPairCheck, 1, 4));  // identical but later sequence
     std::vector<Event> popped;
     while (!q.empty()) popped.push_back(q.pop());
     REQUIRE(popped.size() == 6);
-    CHECK(popped[0].kind == EventKind::kEnd);
+    CHECK(popped[0].t == 0.5);  // time first, whatever the kind
     CHECK((popped[1].a.index == 1 && popped[1].b.index == 4));
     CHECK((popped[2].a.index == 1 && popped[2].b.index == 4));
     CHECK(popped[1].sequence < popped[2].sequence);
