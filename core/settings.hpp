@@ -28,6 +28,9 @@ std::string_view to_string(MicrocollisionRule rule);
 struct Material {
   double friction = 0.5;     // Coulomb coefficient mu, >= 0
   double restitution = 0.5;  // coefficient e in [0, 1] (meaning depends on RestitutionLaw)
+  // Rolling resistance d [m]: the couple d N against relative rolling (impulse/contact_torque.hpp).
+  // 0 (default): a rolling ball rolls forever; a solid sphere decelerates at 5 d g / (7 r).
+  double rolling_resistance = 0.0;
 };
 
 struct Settings {

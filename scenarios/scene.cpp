@@ -216,13 +216,17 @@ Material parse_material(const Reader& r, const json& value, const std::string& p
                         const Material& defaults, bool pair) {
   r.object(value, path);
   if (pair) {
-    r.only_keys(value, path, {"bodies", "friction", "restitution"});
+    r.only_keys(value, path, {"bodies", "friction", "restitution", "rolling_resistance"});
   } else {
-    r.only_keys(value, path, {"friction", "restitution"});
+    r.only_keys(value, path, {"friction", "restitution", "rolling_resistance"});
   }
   Material m = defaults;
   if (value.contains("friction"))
     m.friction = r.non_negative(value["friction"], path + "/friction");
+  if (value.contains("rolling_resistance")) {
+    m.rolling_resistance =
+        r.non_negative(value["rolling_resistance"], path + "/rolling_resistance");
+  }
   if (value.contains("restitution")) {
     m.restitution = r.non_negative(value["restitution"], path + "/restitution");
     if (m.restitution > 1.0) {

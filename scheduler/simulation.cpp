@@ -6,6 +6,7 @@
 #include "distance/toi_bound.hpp"
 #include "impulse/collision_integrator.hpp"
 #include "impulse/collision_matrix.hpp"
+#include "impulse/contact_torque.hpp"
 #include "impulse/microcollision.hpp"
 
 #include <algorithm>
@@ -427,6 +428,41 @@ struct Simulation::Impl {
     return c.u_n < -1e-12 * scale;
   }
 
+  // The couples a point impulse cannot carry (impulse/contact_torque.hpp), applied after the
+  // impulse P_n of a collision: torsional friction about n over a patch resolved by the
+  // centre-of-pressure rule (mean distance of the patch from the centre of pressure), and the
+  // material's rolling resistance against the in-plane relative rotation. Changes the angular
+  // velocities of cb1 and cb2 (true inertias, not the centre-of-pressure ones); returns the
+  // kinetic energy change [J].
+  double resist_rotation(const Contact& c, const Material& material, double P_n,
+                         const Vec3& pressure_W, ContactBody& cb1, ContactBody& cb2) const {
+    if (!(P_n > 0.0)) return 0.0;
+    ContactBody t1 = c.body1, t2 = c.body2;
+    t1.w_W = cb1.w_W;
+    t2.w_W = cb2.w_W;
+    double energy = 0.0;
+    if (c.centre_of_pressure && material.friction > 0.0) {
+      const double r_eff = mean_distance_over_patch(c.patch, c.n_W, pressure_W);
+      const AngularImpulse torsion =
+          resisting_angular_impulse(c.n_W, t1, t2, material.friction * P_n * r_eff);
+      apply_angular_impulse(torsion.L_W, t1, t2);
+      energy += torsion.energy_change;
+    }
+    if (material.rolling_resistance > 0.0) {
+      const Vec3 w_rel = t1.w_W - t2.w_W;
+      const Vec3 rolling = w_rel - c.n_W * c.n_W.dot(w_rel);
+      if (rolling.norm() > 0.0) {
+        const AngularImpulse resistance = resisting_angular_impulse(
+            rolling.normalized(), t1, t2, material.rolling_resistance * P_n);
+        apply_angular_impulse(resistance.L_W, t1, t2);
+        energy += resistance.energy_change;
+      }
+    }
+    cb1.w_W = t1.w_W;
+    cb2.w_W = t2.w_W;
+    return energy;
+  }
+
   // Resolves the collision and applies it to both bodies; returns the record.
   // `depth` counts re-resolutions at a moved contact point (at most one per rule).
   CollisionRecord resolve(const PairRuntime& p, Contact& c, double t, int depth = 0) {
@@ -478,6 +514,7 @@ struct Simulation::Impl {
       result = integrate_collision(K_c, u0_c, frictionless);
     }
     Vec3 p_W = R_WC * result.p_c;
+    Vec3 pressure = c.point_W;  // centre of pressure over a patch
 
     if (c.centre_of_pressure && c.segment) {
       // Where along the segment must the impulse act so that its torque about m vanishes?
@@ -504,7 +541,7 @@ struct Simulation::Impl {
       const bool d_is_1 = b1.is_dynamic();
       const Vec3 x_D = d_is_1 ? b1.state.x_W : b2.state.x_W;
       const double pn = p_W.dot(c.n_W);
-      const Vec3 pressure = pn != 0.0 ? x_D + p_W * (c.n_W.dot(c.point_W - x_D) / pn) : c.point_W;
+      pressure = pn != 0.0 ? x_D + p_W * (c.n_W.dot(c.point_W - x_D) / pn) : c.point_W;
       if (!inside_convex_polygon(c.patch, c.n_W, pressure)) {
         // The patch cannot carry that torque: the body tips about the patch boundary.
         c.centre_of_pressure = false;
@@ -516,25 +553,28 @@ struct Simulation::Impl {
     }
 
     apply_impulse(p_W, cb1, cb2);
-    auto store = [&](Body& b, const ContactBody& cb, const Body& other) {
+    if (c.centre_of_pressure) {
+      // A face resting on a face does not rock: the pressure over the patch takes out the small
+      // in-plane relative rotation (a plastic slap; the spin about n stays free). Over a segment,
+      // only the rotation about m = n x s.
+      ContactBody& cd = b1.is_dynamic() ? cb1 : cb2;
+      const Vec3 w_rel = b1.is_dynamic() ? cb1.w_W - cb2.w_W : cb2.w_W - cb1.w_W;
+      if (c.segment) {
+        const Vec3 m = c.n_W.cross(c.segment_dir_W);
+        cd.w_W -= m * m.dot(w_rel);
+      } else {
+        cd.w_W -= w_rel - c.n_W * c.n_W.dot(w_rel);
+      }
+    }
+    const double energy_of_couples =
+        resist_rotation(c, material, p_W.dot(c.n_W), pressure, cb1, cb2);
+    auto store = [&](Body& b, const ContactBody& cb) {
       if (!b.is_dynamic()) return;
       b.state.v_W = cb.v_W;
       b.state.w_W = cb.w_W;
-      if (c.centre_of_pressure) {
-        // A face resting on a face does not rock: the pressure over the patch takes out the
-        // small in-plane relative rotation (a plastic slap; the spin about n stays free). Over a
-        // segment, only the rotation about m = n x s.
-        const Vec3 w_rel = b.state.w_W - other.state.w_W;
-        if (c.segment) {
-          const Vec3 m = c.n_W.cross(c.segment_dir_W);
-          b.state.w_W -= m * m.dot(w_rel);
-        } else {
-          b.state.w_W -= w_rel - c.n_W * c.n_W.dot(w_rel);
-        }
-      }
     };
-    store(b1, cb1, b2);
-    store(b2, cb2, b1);
+    store(b1, cb1);
+    store(b2, cb2);
     PALPABLE_CHECK(b1.state.v_W.allFinite() && b1.state.w_W.allFinite() &&
                        b2.state.v_W.allFinite() && b2.state.w_W.allFinite(),
                    "non-finite velocity after a collision");
@@ -548,7 +588,7 @@ struct Simulation::Impl {
     record.n_W = c.n_W;
     record.impulse_W = p_W;
     record.approach_speed = -u0_c.z();
-    record.energy_change = result.energy_change;
+    record.energy_change = result.energy_change + energy_of_couples;
     record.centre_of_pressure = c.centre_of_pressure;
     if (micro) {
       ++sim.stats_.microcollisions;
