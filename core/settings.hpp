@@ -31,6 +31,10 @@ struct Material {
   // Rolling resistance d [m]: the couple d N against relative rolling (impulse/contact_torque.hpp).
   // 0 (default): a rolling ball rolls forever; a solid sphere decelerates at 5 d g / (7 r).
   double rolling_resistance = 0.0;
+  // Spinning resistance [m]: the couple s N against relative spin about the normal at a point
+  // contact (a face or edge on a face uses mu over its patch instead). 0 (default): a ball
+  // spinning about the vertical spins forever; a solid sphere's spin decays at 5 s g / (2 r^2).
+  double spinning_resistance = 0.0;
 };
 
 struct Settings {

@@ -216,9 +216,11 @@ Material parse_material(const Reader& r, const json& value, const std::string& p
                         const Material& defaults, bool pair) {
   r.object(value, path);
   if (pair) {
-    r.only_keys(value, path, {"bodies", "friction", "restitution", "rolling_resistance"});
+    r.only_keys(value, path, {"bodies", "friction", "restitution", "rolling_resistance",
+                               "spinning_resistance"});
   } else {
-    r.only_keys(value, path, {"friction", "restitution", "rolling_resistance"});
+    r.only_keys(value, path, {"friction", "restitution", "rolling_resistance",
+                               "spinning_resistance"});
   }
   Material m = defaults;
   if (value.contains("friction"))
@@ -226,6 +228,10 @@ Material parse_material(const Reader& r, const json& value, const std::string& p
   if (value.contains("rolling_resistance")) {
     m.rolling_resistance =
         r.non_negative(value["rolling_resistance"], path + "/rolling_resistance");
+  }
+  if (value.contains("spinning_resistance")) {
+    m.spinning_resistance =
+        r.non_negative(value["spinning_resistance"], path + "/spinning_resistance");
   }
   if (value.contains("restitution")) {
     m.restitution = r.non_negative(value["restitution"], path + "/restitution");

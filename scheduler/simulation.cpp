@@ -429,9 +429,10 @@ struct Simulation::Impl {
   }
 
   // The couples a point impulse cannot carry (impulse/contact_torque.hpp), applied after the
-  // impulse P_n of a collision: torsional friction about n over a patch resolved by the
-  // centre-of-pressure rule (mean distance of the patch from the centre of pressure), and the
-  // material's rolling resistance against the in-plane relative rotation. Changes the angular
+  // impulse P_n of a collision: torsional friction about n — over a patch resolved by the
+  // centre-of-pressure rule, mu times the mean distance of the patch from the centre of pressure;
+  // at a point, the material's spinning resistance — and the material's rolling resistance
+  // against the in-plane relative rotation. Changes the angular
   // velocities of cb1 and cb2 (true inertias, not the centre-of-pressure ones); returns the
   // kinetic energy change [J].
   double resist_rotation(const Contact& c, const Material& material, double P_n,
@@ -441,10 +442,13 @@ struct Simulation::Impl {
     t1.w_W = cb1.w_W;
     t2.w_W = cb2.w_W;
     double energy = 0.0;
-    if (c.centre_of_pressure && material.friction > 0.0) {
-      const double r_eff = mean_distance_over_patch(c.patch, c.n_W, pressure_W);
-      const AngularImpulse torsion =
-          resisting_angular_impulse(c.n_W, t1, t2, material.friction * P_n * r_eff);
+    // About n: Coulomb friction over a patch, or the material's spinning resistance at a point.
+    const double torsion_arm =
+        c.centre_of_pressure
+            ? material.friction * mean_distance_over_patch(c.patch, c.n_W, pressure_W)
+            : material.spinning_resistance;
+    if (torsion_arm > 0.0) {
+      const AngularImpulse torsion = resisting_angular_impulse(c.n_W, t1, t2, torsion_arm * P_n);
       apply_angular_impulse(torsion.L_W, t1, t2);
       energy += torsion.energy_change;
     }

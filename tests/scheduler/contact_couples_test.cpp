@@ -133,7 +133,8 @@ TEST_CASE("a rolling sphere with rolling resistance d decelerates at 5 d g / 7 r
     const BodyState end = sim.state_at(BodyId{1}, t_end);
     if (d == 0.0) {
       // The control: without d, no deceleration. (Measured: the microcollision train gains
-      // 2.4e-5 v0 over this second at envelope 1e-5 m; a drift of the microcollision train, not resistance.)
+      // 2.4e-5 v0 over this second at envelope 1e-5 m; a drift of the microcollision train, not
+      // resistance.)
       CHECK(std::abs(slope(ts, vs)) < 1e-4 * v0);
       CHECK(end.v_W.x() == Approx(v0).epsilon(1e-4));
     } else {
@@ -145,4 +146,38 @@ TEST_CASE("a rolling sphere with rolling resistance d decelerates at 5 d g / 7 r
     }
     CHECK(std::abs(end.x_W.z() - r) <= 2.0 * world.settings.envelope_m);
   }
+}
+
+TEST_CASE("a sphere spinning about the vertical with spinning resistance s slows at 5 s g / 2 r^2",
+          "[scheduler]") {
+  const double r = 0.02, mass = 0.0335, w0 = 10.0, g = 9.81, s = 1e-4;
+  World world;
+  world.gravity_W = Vec3(0, 0, -g);
+  world.default_material = Material{0.3, 0.0, 0.0, s};
+  world.settings.envelope_m = 1e-5;
+  world.add(table());
+  Body ball;
+  ball.name = "ball";
+  ball.shape = std::make_shared<const Shape>(make_sphere(r));
+  ball.mass = mass_properties_from_mass(*ball.shape, mass);
+  ball.state.x_W = Vec3(0, 0, r);
+  ball.state.w_W = Vec3(0, 0, w0);
+  world.add(ball);
+  const double rate = 5.0 * s * g / (2.0 * r * r);
+  const double t_stop = w0 / rate;
+  Simulation sim(world, SimulationOptions{t_stop / 40.0});
+  Samples rec;
+  sim.run_until(1.5 * t_stop, &rec);
+  std::vector<double> ts, ws;
+  for (std::size_t i = 0; i < rec.t.size(); ++i) {
+    if (rec.t[i] > 0.1 * t_stop && rec.t[i] < 0.9 * t_stop) {
+      ts.push_back(rec.t[i]);
+      ws.push_back(rec.s[i].w_W.z());
+    }
+  }
+  REQUIRE(ts.size() > 20);
+  CHECK(slope(ts, ws) == Approx(-rate).epsilon(0.02));
+  const BodyState end = sim.state_at(BodyId{1}, 1.5 * t_stop);
+  CHECK(end.w_W.norm() <= 1e-12 * w0);
+  CHECK(end.x_W.head<2>().norm() < 1e-12);  // spinning in place: no sideways motion
 }

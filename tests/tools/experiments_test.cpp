@@ -110,15 +110,66 @@ TEST_CASE("pool break: the rack scatters, no ball leaves the table, no energy cr
   CHECK(r.stats.collisions > 15);
 }
 
-TEST_CASE("balls in a dish: they land in it and stay in it", "[tools][experiments]") {
+TEST_CASE("balls in a dish: they land in it, stay in it and come to rest", "[tools][experiments]") {
   RunResult r = run("balls_in_dish.json");
   check_common(r);
   const auto& world = r.scene.world;
-  const double rim_radius = 0.08 + 0.2 * std::cos(25.0 * M_PI / 180.0);
+  const double radius = 0.02, apothem = 0.08, eps = world.settings.envelope_m;
+  const double rim_radius = apothem + 0.2 * std::cos(25.0 * M_PI / 180.0);
+  const auto& end = r.trace.samples.back();
+  const auto& second_before = r.trace.samples[r.trace.samples.size() - 101];
   for (std::size_t i = 1; i < world.bodies.size(); ++i) {
-    const BodyState& end = r.trace.samples.back()[i];
-    CHECK(std::hypot(end.x_W.x(), end.x_W.y()) < rim_radius);
-    CHECK(end.x_W.z() >= 0.02);
-    CHECK(end.x_W.z() < 0.1);
+    CAPTURE(world.bodies[i].name);
+    for (const auto& sample : r.trace.samples) {
+      CHECK(std::hypot(sample[i].x_W.x(), sample[i].x_W.y()) < rim_radius);
+      CHECK(sample[i].x_W.z() >= radius - 1e-12);  // never through the bottom
+    }
+    // At rest on the flat bottom (rolling and spinning resistance of 0.1 mm took out the rolling): not
+    // moving, not spinning, bouncing within the microcollision envelope.
+    CHECK(std::hypot(end[i].x_W.x(), end[i].x_W.y()) < apothem);
+    CHECK(end[i].x_W.z() <= radius + 2.0 * eps);
+    CHECK(end[i].v_W.head<2>().norm() < 1e-9);
+    CHECK(end[i].w_W.norm() * radius < 1e-9);
+    CHECK((end[i].x_W - second_before[i].x_W).head<2>().norm() < 1e-9);
   }
+}
+
+TEST_CASE("coins: they bounce on their rims, land flat and spin down to rest on the table",
+          "[tools][experiments]") {
+  RunResult r = run("coins.json");
+  check_common(r);
+  const auto& world = r.scene.world;
+  const double radius = 0.01213, half_thickness = 0.000875, eps = world.settings.envelope_m;
+  const auto& end = r.trace.samples.back();
+  double fastest_spin = 0.0;
+  for (std::size_t i = 1; i < world.bodies.size(); ++i) {
+    CAPTURE(world.bodies[i].name);
+    for (const auto& sample : r.trace.samples) {
+      const BodyState& s = sample[i];
+      fastest_spin = std::max(fastest_spin, s.w_W.norm());
+      // The lowest point of the coin (a 32-gon prism) is never below the table.
+      const palpable::Mat3 R = s.q_WM.toRotationMatrix();
+      double lowest = 1e300;
+      for (int k = 0; k < 32; ++k) {
+        const double a = 2.0 * M_PI * k / 32;
+        for (double side : {-1.0, 1.0}) {
+          const Vec3 corner(radius * std::cos(a), radius * std::sin(a), side * half_thickness);
+          lowest = std::min(lowest, (s.x_W + R * corner).z());
+        }
+      }
+      CHECK(lowest >= -1e-12);
+      CHECK(std::hypot(s.x_W.x(), s.x_W.y()) < 0.2);
+    }
+    // At rest, flat: the axis within the envelope's tilt of the vertical, resting on a face.
+    const BodyState& s = end[i];
+    const Vec3 axis = s.q_WM * Vec3::UnitZ();
+    CHECK(std::abs(axis.z()) >= std::cos(2.0 * eps / radius));
+    CHECK(s.x_W.z() >= half_thickness - 1e-12);
+    CHECK(s.x_W.z() <= half_thickness + 2.0 * eps);
+    CHECK(s.v_W.head<2>().norm() < 1e-9);
+    CHECK(s.w_W.norm() < 1e-9);
+  }
+  CHECK(fastest_spin >= 40.0);  // they did spin (the scene starts them at 10 to 40 rad/s)
+  CHECK(r.stats.collisions > 5);
+  CHECK(r.stats.centre_of_pressure > 100);
 }
