@@ -47,6 +47,21 @@ double slope(const std::vector<double>& x, const std::vector<double>& y) {
   return sxy / sxx;
 }
 
+// Least-squares slope against time of f(state of body 1) over the samples with t0 < t < t1;
+// requires more than 20 such samples.
+template <class F>
+double slope_over(const Samples& rec, double t0, double t1, F f) {
+  std::vector<double> ts, ys;
+  for (std::size_t i = 0; i < rec.t.size(); ++i) {
+    if (rec.t[i] > t0 && rec.t[i] < t1) {
+      ts.push_back(rec.t[i]);
+      ys.push_back(f(rec.s[i]));
+    }
+  }
+  REQUIRE(ts.size() > 20);
+  return slope(ts, ys);
+}
+
 }  // namespace
 
 TEST_CASE("a coin spinning flat on a table slows at mu m g r_eff / I_n and stops", "[scheduler]") {
@@ -80,17 +95,10 @@ TEST_CASE("a coin spinning flat on a table slows at mu m g r_eff / I_n and stops
   Simulation sim(world, SimulationOptions{t_stop / 40.0});
   Samples rec;
   sim.run_until(1.5 * t_stop, &rec);
-  std::vector<double> ts, ws;
-  for (std::size_t i = 0; i < rec.t.size(); ++i) {
-    if (rec.t[i] > 0.1 * t_stop && rec.t[i] < 0.9 * t_stop) {
-      ts.push_back(rec.t[i]);
-      ws.push_back(rec.s[i].w_W.z());
-    }
-  }
-  REQUIRE(ts.size() > 20);
+  const auto spin = [](const BodyState& st) { return st.w_W.z(); };
   // Spin is taken out once per microcollision (about g / (2 v_micro) per second): the slope of
   // the staircase matches the continuous rate to within a fraction of one step.
-  CHECK(slope(ts, ws) == Approx(-rate).epsilon(0.02));
+  CHECK(slope_over(rec, 0.1 * t_stop, 0.9 * t_stop, spin) == Approx(-rate).epsilon(0.02));
   const BodyState end = sim.state_at(BodyId{1}, 1.5 * t_stop);
   CHECK(std::abs(end.w_W.z()) <= 1e-12 * w0);
   CHECK(end.v_W.head<2>().norm() < 1e-9);
@@ -122,23 +130,18 @@ TEST_CASE("a rolling sphere with rolling resistance d decelerates at 5 d g / 7 r
     Simulation sim(world, SimulationOptions{t_end / 60.0});
     Samples rec;
     sim.run_until(t_end, &rec);
-    std::vector<double> ts, vs;
-    for (std::size_t i = 0; i < rec.t.size(); ++i) {
-      if (rec.t[i] > 0.05 * t_end && (d == 0.0 || rec.t[i] < 0.9 * v0 / decel)) {
-        ts.push_back(rec.t[i]);
-        vs.push_back(rec.s[i].v_W.x());
-      }
-    }
-    REQUIRE(ts.size() > 20);
+    const double window_end = d == 0.0 ? t_end : 0.9 * v0 / decel;
+    const double v_slope =
+        slope_over(rec, 0.05 * t_end, window_end, [](const BodyState& st) { return st.v_W.x(); });
     const BodyState end = sim.state_at(BodyId{1}, t_end);
     if (d == 0.0) {
       // The control: without d, no deceleration. (Measured: the microcollision train gains
       // 2.4e-5 v0 over this second at envelope 1e-5 m; a drift of the microcollision train, not
       // resistance.)
-      CHECK(std::abs(slope(ts, vs)) < 1e-4 * v0);
+      CHECK(std::abs(v_slope) < 1e-4 * v0);
       CHECK(end.v_W.x() == Approx(v0).epsilon(1e-4));
     } else {
-      CHECK(slope(ts, vs) == Approx(-decel).epsilon(0.02));
+      CHECK(v_slope == Approx(-decel).epsilon(0.02));
       CHECK(end.v_W.head<2>().norm() < 1e-9);
       CHECK(end.w_W.norm() * r < 1e-6);
       // Where it stops: v0^2 / (2 decel).
@@ -168,15 +171,8 @@ TEST_CASE("a sphere spinning about the vertical with spinning resistance s slows
   Simulation sim(world, SimulationOptions{t_stop / 40.0});
   Samples rec;
   sim.run_until(1.5 * t_stop, &rec);
-  std::vector<double> ts, ws;
-  for (std::size_t i = 0; i < rec.t.size(); ++i) {
-    if (rec.t[i] > 0.1 * t_stop && rec.t[i] < 0.9 * t_stop) {
-      ts.push_back(rec.t[i]);
-      ws.push_back(rec.s[i].w_W.z());
-    }
-  }
-  REQUIRE(ts.size() > 20);
-  CHECK(slope(ts, ws) == Approx(-rate).epsilon(0.02));
+  const auto spin = [](const BodyState& st) { return st.w_W.z(); };
+  CHECK(slope_over(rec, 0.1 * t_stop, 0.9 * t_stop, spin) == Approx(-rate).epsilon(0.02));
   const BodyState end = sim.state_at(BodyId{1}, 1.5 * t_stop);
   CHECK(end.w_W.norm() <= 1e-12 * w0);
   CHECK(end.x_W.head<2>().norm() < 1e-12);  // spinning in place: no sideways motion
