@@ -182,8 +182,85 @@ def coins():
         "bodies": bodies})
 
 
+def bowling():
+    # A 60 ft lane (18.29 m from the foul line to the head pin), ten pins 12 in apart, each the
+    # convex hull of rings through the regulation pin profile (15 in tall, 4.766 in at the belly,
+    # 2.03 in at the base; 1.53 kg), and a 7 kg ball (8.5 in) rolling at 8 m/s into the 1-3
+    # pocket. Envelope 1 mm, as in the paper.
+    profile = [(0.0, 0.0254), (0.03, 0.043), (0.076, 0.058), (0.114, 0.0605), (0.16, 0.055),
+               (0.2, 0.042), (0.25, 0.0235), (0.29, 0.027), (0.33, 0.032), (0.36, 0.025),
+               (0.381, 0.008)]
+    ring = 12
+    # The hull of rings of aligned regular 12-gons is the polygonal solid of revolution of the
+    # profile's convex chain (the neck is filled in). Its cross-section area is proportional to
+    # r^2 at every height, so the centroid follows from the circular frusta of that chain.
+    chain = []
+    for z, radius in profile:  # upper convex chain in the (z, r) half-plane
+        while len(chain) >= 2:
+            (z0, r0), (z1, r1) = chain[-2], chain[-1]
+            if (z1 - z0) * (radius - r0) - (r1 - r0) * (z - z0) >= 0:  # not a right turn
+                chain.pop()
+            else:
+                break
+        chain.append((z, radius))
+    points = []
+    for z, radius in chain:
+        for k in range(ring):
+            a = 2 * math.pi * k / ring
+            points.append([r17(radius * math.cos(a)), r17(radius * math.sin(a)), r17(z)])
+    vol = 0.0
+    moment = 0.0
+    for (z0, r0), (z1, r1) in zip(chain, chain[1:]):
+        h = z1 - z0
+        v = math.pi * h / 3 * (r0 * r0 + r0 * r1 + r1 * r1)
+        zc = z0 + h * (r0 * r0 + 2 * r0 * r1 + 3 * r1 * r1) / (4 * (r0 * r0 + r0 * r1 + r1 * r1))
+        vol += v
+        moment += v * zc
+    z_com = moment / vol
+    envelope = 1e-3
+    head_x = 18.29
+    spacing = 0.3048
+    bodies = [{"name": "lane", "motion": "fixed",
+               "shape": {"type": "halfspace", "normal": [0, 0, 1], "offset": 0}}]
+    # The pin deck's kickbacks (side walls, inner faces 0.8 m from the lane's centre line) and the
+    # pit cushion behind it (inner face 21.3 m from the foul line), fixed boxes.
+    wall_half = [1.9, 0.05, 0.4]
+    for side, y in (("left", -0.85), ("right", 0.85)):
+        bodies.append({"name": f"kickback_{side}", "motion": "fixed",
+                       "shape": {"type": "box", "half_extents": wall_half},
+                       "position": [19.6, y, 0.4]})
+    bodies.append({"name": "pit_cushion", "motion": "fixed",
+                   "shape": {"type": "box", "half_extents": [0.05, 0.9, 0.4]},
+                   "position": [21.35, 0.0, 0.4]})
+    pin = 0
+    for row in range(4):
+        for j in range(row + 1):
+            pin += 1
+            x = head_x + row * spacing * math.sqrt(3) / 2
+            y = (j - row / 2) * spacing
+            bodies.append({"name": f"pin{pin}", "mass": 1.53,
+                           "shape": {"type": "convex", "vertices": points},
+                           "position": [r17(x), r17(y), r17(z_com + envelope / 2)]})
+    r_ball = 0.108
+    bodies.append({"name": "ball", "mass": 7.0, "shape": {"type": "sphere", "radius": r_ball},
+                   "position": [0.0, 0.06, r17(r_ball + envelope / 2)],
+                   "velocity": [8.0, 0, 0], "angular_velocity": [0, r17(8.0 / r_ball), 0]})
+    write("bowling.json", {
+        "format": "palpable-scene/1", "name": "bowling",
+        "description": "A 7 kg ball (r = 108 mm) rolling at 8 m/s down a 60 ft lane into the 1-3 pocket of ten pins (each the convex hull of rings through the regulation profile, 1.53 kg, 12 in apart). Envelope 1 mm, as in the paper. Ball-lane mu = 0.04 (oiled), pin-lane mu = 0.2, ball-pin e = 0.7, pin-pin e = 0.6. Kickbacks (side walls 0.8 m from the centre line) and a pit cushion 21.3 m from the foul line keep everything on the deck. Mirtich & Canny: 5.0 s virtual, 167 s real in 1995.",
+        "gravity": G, "end_time": 5.0, "output": {"interval": 0.01},
+        "settings": {"envelope": envelope},
+        "materials": {"default": {"friction": 0.2, "restitution": 0.6},
+                      "pairs": [{"bodies": ["ball", "lane"], "friction": 0.04, "restitution": 0.3},
+                                {"bodies": ["lane", "*"], "friction": 0.2, "restitution": 0.3},
+                                {"bodies": ["ball", "*"], "friction": 0.1, "restitution": 0.7}]},
+        "bodies": bodies})
+
+
+
 if __name__ == "__main__":
     chain_of_balls()
     pool_break()
     balls_in_dish()
     coins()
+    bowling()

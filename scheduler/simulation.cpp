@@ -75,6 +75,24 @@ Vec3 exit_point(const std::vector<Vec3>& patch, const Vec3& n, const Vec3& insid
   return inside + s_exit * d;
 }
 
+// The patch point approaching fastest (the corner that lands first); among equals, the one
+// nearest `foot` (the foot of the dynamic body's centre of mass).
+Vec3 fastest_approaching_corner(const std::vector<Vec3>& patch, const Vec3& n_W,
+                                const BodyState& s1, const BodyState& s2, const Vec3& foot) {
+  double best = kInfinity;
+  Vec3 corner = patch.front();
+  for (const Vec3& q : patch) {
+    const double u_n = (point_velocity_W(s1, q) - point_velocity_W(s2, q)).dot(n_W);
+    const double tie = 1e-12 * (1.0 + std::abs(u_n));
+    if (u_n < best - tie ||
+        (std::abs(u_n - best) <= tie && (q - foot).norm() < (corner - foot).norm())) {
+      best = std::min(best, u_n);
+      corner = q;
+    }
+  }
+  return corner;
+}
+
 }  // namespace
 
 struct Simulation::Impl {
@@ -353,18 +371,7 @@ struct Simulation::Impl {
         const double length = (c.patch[1] - c.patch[0]).norm();
         c.point_W = c.patch[0] + along * std::clamp((foot - c.patch[0]).dot(along), 0.0, length);
       } else {
-        // Otherwise the patch point approaching fastest (the corner that lands first); among
-        // equals, the one nearest the foot of the centre of mass.
-        double best = kInfinity;
-        for (const Vec3& q : c.patch) {
-          const double u_n = (point_velocity_W(s1, q) - point_velocity_W(s2, q)).dot(c.n_W);
-          const double tie = 1e-12 * (1.0 + std::abs(u_n));
-          if (u_n < best - tie ||
-              (std::abs(u_n - best) <= tie && (q - foot).norm() < (c.point_W - foot).norm())) {
-            best = std::min(best, u_n);
-            c.point_W = q;
-          }
-        }
+        c.point_W = fastest_approaching_corner(c.patch, c.n_W, s1, s2, foot);
       }
     }
     c.body1.r_W = c.point_W - s1.x_W;
@@ -547,9 +554,17 @@ struct Simulation::Impl {
       const double pn = p_W.dot(c.n_W);
       pressure = pn != 0.0 ? x_D + p_W * (c.n_W.dot(c.point_W - x_D) / pn) : c.point_W;
       if (!inside_convex_polygon(c.patch, c.n_W, pressure)) {
-        // The patch cannot carry that torque: the body tips about the patch boundary.
+        // The patch cannot carry that torque: the body tips about the patch boundary. If the
+        // body turns so fast that the boundary point already separates, the corner landing
+        // first takes the collision (else a zero impulse there leaves the pair approaching at
+        // the same instant, again and again).
         c.centre_of_pressure = false;
         c.point_W = exit_point(c.patch, c.n_W, c.point_W, pressure);
+        const Vec3 u_exit =
+            point_velocity_W(b1.state, c.point_W) - point_velocity_W(b2.state, c.point_W);
+        if (!(u_exit.dot(c.n_W) < 0.0)) {
+          c.point_W = fastest_approaching_corner(c.patch, c.n_W, b1.state, b2.state, x_D);
+        }
         c.body1.r_W = c.point_W - b1.state.x_W;
         c.body2.r_W = c.point_W - b2.state.x_W;
         return resolve(p, c, t, depth + 1);

@@ -2,6 +2,7 @@
 // must physically hold: no penetration, nobody leaves the table or dish, no energy created
 // beyond what the microcollision floor lends (each resting body re-lifted by up to the envelope).
 #include "core/ballistic.hpp"
+#include "core/shape.hpp"
 #include "tools/lib/run_scene.hpp"
 
 #include <catch2/catch.hpp>
@@ -124,8 +125,8 @@ TEST_CASE("balls in a dish: they land in it, stay in it and come to rest", "[too
       CHECK(std::hypot(sample[i].x_W.x(), sample[i].x_W.y()) < rim_radius);
       CHECK(sample[i].x_W.z() >= radius - 1e-12);  // never through the bottom
     }
-    // At rest on the flat bottom (rolling and spinning resistance of 0.1 mm took out the rolling): not
-    // moving, not spinning, bouncing within the microcollision envelope.
+    // At rest on the flat bottom (rolling and spinning resistance of 0.1 mm took out the rolling):
+    // not moving, not spinning, bouncing within the microcollision envelope.
     CHECK(std::hypot(end[i].x_W.x(), end[i].x_W.y()) < apothem);
     CHECK(end[i].x_W.z() <= radius + 2.0 * eps);
     CHECK(end[i].v_W.head<2>().norm() < 1e-9);
@@ -172,4 +173,40 @@ TEST_CASE("coins: they bounce on their rims, land flat and spin down to rest on 
   CHECK(fastest_spin >= 40.0);  // they did spin (the scene starts them at 10 to 40 rad/s)
   CHECK(r.stats.collisions > 5);
   CHECK(r.stats.centre_of_pressure > 100);
+}
+
+TEST_CASE("bowling: the ball knocks the pins down and everything stays on the pin deck",
+          "[tools][experiments]") {
+  RunResult r = run("bowling.json");
+  check_common(r);
+  const auto& world = r.scene.world;
+  const double eps = world.settings.envelope_m;
+  int fallen = 0;
+  for (std::size_t i = 0; i < world.bodies.size(); ++i) {
+    const auto& body = world.bodies[i];
+    if (!body.is_dynamic()) continue;
+    CAPTURE(body.name);
+    for (const auto& sample : r.trace.samples) {
+      const BodyState& s = sample[i];
+      // Never through the lane, the kickbacks (inner faces at |y| = 0.8 m) or the pit cushion
+      // (inner face at x = 21.3 m): the extreme points of the body's shape.
+      // How far the body reaches along d.
+      auto extreme = [&](const Vec3& d) {
+        return palpable::support_W(*body.shape, s.x_W, s.q_WM, d).dot(d);
+      };
+      CHECK(extreme(-Vec3::UnitZ()) <= 1e-12);  // the lowest point is at z >= 0
+      CHECK(extreme(Vec3::UnitY()) <= 0.8 + 1e-12);
+      CHECK(extreme(-Vec3::UnitY()) <= 0.8 + 1e-12);  // y >= -0.8
+      CHECK(extreme(Vec3::UnitX()) <= 21.3 + 1e-12);
+    }
+    if (body.name.rfind("pin", 0) == 0) {
+      const Vec3 axis = r.trace.samples.back()[i].q_WM * Vec3::UnitZ();
+      if (axis.z() < 0.5) ++fallen;  // tilted more than 60 degrees: down
+      CHECK(r.trace.samples.back()[i].v_W.head<2>().norm() < 0.5);
+    }
+  }
+  INFO("pins down: " << fallen);
+  CHECK(fallen >= 7);
+  CHECK(r.stats.collisions > 50);
+  CHECK(eps == 1e-3);  // the paper's envelope
 }
