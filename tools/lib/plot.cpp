@@ -133,23 +133,48 @@ std::string series_plot(const Trace& trace, const std::string& body_name, const 
 
 // Top view: every body's x-y path (one data block per body), start marked.
 std::string top_plot(const Trace& trace, const fs::path& dir) {
-  std::ofstream data(dir / "data.dat");
+  // Bodies that never move (fixed ones, a halfspace's origin) are left out: their "path" is a
+  // point that says nothing and may sit far from the action.
+  std::vector<std::size_t> moving;
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
   for (std::size_t b = 0; b < trace.body_names.size(); ++b) {
-    if (b > 0) data << "\n\n";
+    bool moves = false;
     for (std::size_t k = 0; k < trace.times.size(); ++k) {
-      put(data, trace.samples[k][b].x_W.x());
+      moves = moves || trace.samples[k][b].x_W != trace.samples[0][b].x_W;
+    }
+    if (!moves) continue;
+    moving.push_back(b);
+    for (std::size_t k = 0; k < trace.times.size(); ++k) {
+      lo = lo.cwiseMin(trace.samples[k][b].x_W);
+      hi = hi.cwiseMax(trace.samples[k][b].x_W);
+    }
+  }
+  if (moving.empty()) throw InputError("trace", "no body moves: nothing to draw in a top view");
+  std::ofstream data(dir / "data.dat");
+  for (std::size_t i = 0; i < moving.size(); ++i) {
+    if (i > 0) data << "\n\n";
+    for (std::size_t k = 0; k < trace.times.size(); ++k) {
+      put(data, trace.samples[k][moving[i]].x_W.x());
       data << ' ';
-      put(data, trace.samples[k][b].x_W.y());
+      put(data, trace.samples[k][moving[i]].x_W.y());
       data << '\n';
     }
   }
+  // A true top view has equal axes; a path 5 times longer than wide (a bowling lane) would be a
+  // line, so then the axes are scaled apart and the title says so.
+  const double width = hi.x() - lo.x(), height = hi.y() - lo.y();
+  const bool to_scale = std::max(width, height) <= 5.0 * std::min(width, height);
   std::ostringstream gp;
-  gp << "set title 'Top view: paths of the centres of mass'\nset grid\nset size ratio -1\n"
+  gp << "set title "
+     << quoted(std::string("Top view: paths of the centres of mass") +
+               (to_scale ? "" : " (axes not to scale)"))
+     << "\nset grid\n"
+     << (to_scale ? "set size ratio -1\n" : "")
      << "set xlabel 'x [m]'\nset ylabel 'y [m]'\nset key outside right\nplot ";
-  for (std::size_t b = 0; b < trace.body_names.size(); ++b) {
-    gp << (b > 0 ? ", " : "") << "'data.dat' index " << b << " w l lc " << b + 1 << " t "
-       << quoted(trace.body_names[b]) << ", '' index " << b << " every ::0::0 w p pt 7 lc " << b + 1
-       << " notitle";
+  for (std::size_t i = 0; i < moving.size(); ++i) {
+    gp << (i > 0 ? ", " : "") << "'data.dat' index " << i << " w l lc " << i + 1 << " t "
+       << quoted(trace.body_names[moving[i]]) << " noenhanced, '' index " << i
+       << " every ::0::0 w p pt 7 lc " << i + 1 << " notitle";
   }
   gp << "\n";
   return gp.str();
