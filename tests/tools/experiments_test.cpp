@@ -109,6 +109,51 @@ TEST_CASE("pool break: the rack scatters, no ball leaves the table, no energy cr
   }
   CHECK(scattered >= 10);
   CHECK(r.stats.collisions > 15);
+
+  // Momentum: until the first ball reaches a cushion, only gravity and the cloth act on the
+  // balls from outside (ball-ball impulses cancel in pairs). The cloth's normal impulse so far is
+  // exactly N = M g t + P_z(t) - P_z(0), and Coulomb bounds its friction by mu N, so
+  // |P_xy(t) - P_xy(0)| <= mu_cloth (M g t + P_z(t) - P_z(0)).
+  const double mu_cloth = 0.2, g = -world.gravity_W.z();
+  auto momentum = [&](std::size_t k) {
+    Vec3 p = Vec3::Zero();
+    for (std::size_t i = 2; i < world.bodies.size(); ++i) {
+      p += world.bodies[i].mass.mass * r.trace.samples[k][i].v_W;
+    }
+    return p;
+  };
+  double total_mass = 0.0;
+  for (std::size_t i = 2; i < world.bodies.size(); ++i) total_mass += world.bodies[i].mass.mass;
+  const Vec3 p0 = momentum(0);
+  // No ball is faster than all the kinetic energy in it allows, so between two samples none
+  // moves further than `reach`: a sample with every ball further than that from the cushions
+  // comes before any cushion contact.
+  double kinetic = 0.0, lightest = 1e300;
+  for (std::size_t i = 2; i < world.bodies.size(); ++i) {
+    kinetic += 0.5 * world.bodies[i].mass.mass * r.trace.samples[0][i].v_W.squaredNorm() +
+               palpable::rotational_energy(world.bodies[i].mass, r.trace.samples[0][i]);
+    lightest = std::min(lightest, world.bodies[i].mass.mass);
+  }
+  const double interval = r.trace.times[1] - r.trace.times[0];
+  const double reach =
+      std::sqrt(2.0 * kinetic / lightest) * interval + radius + 2.0 * world.settings.envelope_m;
+  std::size_t checked = 0;
+  for (std::size_t k = 0; k < r.trace.samples.size(); ++k) {
+    bool near_cushion = false;
+    for (std::size_t i = 2; i < world.bodies.size(); ++i) {
+      const Vec3& x = r.trace.samples[k][i].x_W;
+      near_cushion = near_cushion || std::abs(x.x()) >= half_length - reach ||
+                     std::abs(x.y()) >= half_width - reach;
+    }
+    if (near_cushion) break;
+    const Vec3 p = momentum(k);
+    const double t = r.trace.times[k];
+    CAPTURE(t);
+    CHECK((p - p0).head<2>().norm() <=
+          mu_cloth * (total_mass * g * t + p.z() - p0.z()) + 1e-12 * p0.norm());
+    ++checked;
+  }
+  CHECK(checked > 10);  // the break itself happens before any ball reaches a cushion
 }
 
 TEST_CASE("balls in a dish: they land in it, stay in it and come to rest", "[tools][experiments]") {
