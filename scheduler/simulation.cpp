@@ -126,6 +126,10 @@ struct Simulation::Impl {
     bool centre_of_pressure = false;
     bool segment = false;
     Vec3 segment_dir_W = Vec3::Zero();  // unit, along the segment patch
+    // The gap between the bodies along n and a point of body 2's support plane: each body's
+    // velocity is taken where the contact point, moved along n, meets its own surface.
+    double gap = 0.0;
+    Vec3 plane2_W = Vec3::Zero();
     std::vector<Vec3> patch;
   };
 
@@ -374,8 +378,9 @@ struct Simulation::Impl {
         c.point_W = fastest_approaching_corner(c.patch, c.n_W, s1, s2, foot);
       }
     }
-    c.body1.r_W = c.point_W - s1.x_W;
-    c.body2.r_W = c.point_W - s2.x_W;
+    c.gap = c.n_W.dot(dr.p1_W - dr.p2_W);
+    c.plane2_W = dr.p2_W;
+    place(c, c.point_W, s1.x_W, s2.x_W);
     c.u_n = (contact_point_velocity_W(c.body1) - contact_point_velocity_W(c.body2)).dot(c.n_W);
 
     // Rate of change of the slip at the moving contact location over the next flight
@@ -402,6 +407,18 @@ struct Simulation::Impl {
     };
     c.a_rel_W = accel(b1, c.body1) - accel(b2, c.body2);
     return c;
+  }
+
+  // Puts the contact at `point_W` (between the bodies, on the contact normal's line through it):
+  // the contact point offsets of both bodies are to where that line meets each body's surface.
+  // (Taking both at the midpoint of a gap d would give a ball rolling at w a slip of w d / 2
+  // there that its surface does not have; the microcollisions "correcting" it sped rolling balls
+  // up by 2.4e-5 of their speed per second at envelope 1e-5 m.)
+  static void place(Contact& c, const Vec3& point_W, const Vec3& x1_W, const Vec3& x2_W) {
+    c.point_W = point_W;
+    const double height = c.n_W.dot(point_W - c.plane2_W);  // above body 2's surface
+    c.body1.r_W = point_W + c.n_W * (c.gap - height) - x1_W;
+    c.body2.r_W = point_W - c.n_W * height - x2_W;
   }
 
   // The piece-pair result a collision would be resolved at: `dr` itself, or, for a pair with a
@@ -541,9 +558,8 @@ struct Simulation::Impl {
       if (!inside || (depth == 0 && std::abs(lambda) > 1e-12 * (1.0 + length))) {
         // Inside: resolve once more at the centre of pressure (K depends on the point). Outside:
         // the segment cannot hold that torque and the body tips about the end it reaches.
-        c.point_W = c.patch[0] + c.segment_dir_W * std::clamp(s_pressure, 0.0, length);
-        c.body1.r_W = c.point_W - b1.state.x_W;
-        c.body2.r_W = c.point_W - b2.state.x_W;
+        place(c, c.patch[0] + c.segment_dir_W * std::clamp(s_pressure, 0.0, length), b1.state.x_W,
+              b2.state.x_W);
         if (!inside) c.centre_of_pressure = c.segment = false;
         return resolve(p, c, t, depth + 1);
       }
@@ -565,8 +581,7 @@ struct Simulation::Impl {
         if (!(u_exit.dot(c.n_W) < 0.0)) {
           c.point_W = fastest_approaching_corner(c.patch, c.n_W, b1.state, b2.state, x_D);
         }
-        c.body1.r_W = c.point_W - b1.state.x_W;
-        c.body2.r_W = c.point_W - b2.state.x_W;
+        place(c, c.point_W, b1.state.x_W, b2.state.x_W);
         return resolve(p, c, t, depth + 1);
       }
     }
