@@ -102,7 +102,7 @@ palpable::tools::CommandRegistration registration{
           "  for k in 1 2 3; do palpable sweep SCENE --vary ... --shard $k/3 --out part$k.csv; "
           "done\n"
           "  palpable sweep --merge part1.csv part2.csv part3.csv --out all.csv --plot all.png");
-      app.add_option("scene", c->scene, "Scene file (JSON), or - for standard input");
+      app.add_option("scene", c->scene, "Scene file (JSON)");
       app.add_option("--vary", c->vary,
                      "/json/pointer=v1,v2,...: the values one scene value takes (each parsed as\n"
                      "JSON, a bare word is a string; a value holding commas goes in brackets or\n"

@@ -177,6 +177,9 @@ TEST_CASE("bad sweep options are rejected before anything runs, naming the optio
   SweepOptions jobs = small_sweep();
   jobs.jobs = 0;
   CHECK_THROWS_WITH(palpable::tools::run_sweep(jobs), Catch::StartsWith("--jobs"));
+  SweepOptions stdin_scene = small_sweep();
+  stdin_scene.scene_path = "-";
+  CHECK_THROWS_WITH(palpable::tools::run_sweep(stdin_scene), Catch::StartsWith("scene"));
   SweepOptions end = small_sweep();
   end.end_time = -1.0;
   CHECK_THROWS_WITH(palpable::tools::run_sweep(end), Catch::StartsWith("--end"));

@@ -445,6 +445,9 @@ double primary_error(const json& reference) {
 }
 
 SweepTable run_sweep(const SweepOptions& options) {
+  if (options.scene_path == "-") {
+    throw InputError("scene", "a sweep reads the scene once per run: give a file, not -");
+  }
   if (options.repeat < 1) throw InputError("--repeat", "expected a whole number >= 1");
   if (options.jobs < 1) throw InputError("--jobs", "expected a whole number >= 1");
   if (options.shard.count == 0 || options.shard.index == 0 ||
