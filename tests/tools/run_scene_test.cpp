@@ -71,6 +71,32 @@ TEST_CASE("ball on platter orbits at 2 Omega / 7 on the closed-form circle",
   CHECK(r.stats.penetrations == 0);
 }
 
+TEST_CASE("sphere launched without spin rolls from 2 v0 / (7 mu g) at 5 v0 / 7",
+          "[tools][run][scene]") {
+  // DESIGN.md 6: v0 = 2 m/s, mu = 0.2, g = 9.81. The error is proportional to the envelope
+  // (measured 6.1e-4 at 1e-4 m and 6.1e-6 at 1e-6 m, tools/accuracy-curves).
+  for (const auto& [envelope, bound] : {std::pair<const char*, double>{"1e-4", 1e-3},
+                                        std::pair<const char*, double>{"1e-6", 1e-5}}) {
+    CAPTURE(envelope);
+    RunOptions options;
+    options.scene_path = scene("sphere_slide_to_roll.json");
+    options.overrides = {std::string("/settings/envelope=") + envelope};
+    RunResult r = run_scene(options);
+    const json& f = r.reference;
+    INFO(f.dump(2));
+    CHECK(f["mode"] == "slide_then_roll");
+    CHECK(f["roll_time_closed_form_s"].get<double>() == Approx(4.0 / (7.0 * 0.2 * 9.81)));
+    CHECK(f["final_speed_closed_form"].get<double>() == Approx(10.0 / 7.0));
+    CHECK(std::abs(f["roll_time_error_s"].get<double>()) /
+              f["roll_time_closed_form_s"].get<double>() <=
+          bound);
+    CHECK(std::abs(f["final_speed_rel_error"].get<double>()) <= bound);
+    CHECK(std::abs(f["deceleration_rel_error"].get<double>()) <= bound);
+    CHECK(r.stats.microcollisions > 100);
+    CHECK(r.stats.penetrations == 0);
+  }
+}
+
 TEST_CASE("a run writes the trace with the exact header, samples at k x interval", "[tools][run]") {
   RunOptions options;
   options.scene_path = scene("block_on_ramp_accelerating.json");

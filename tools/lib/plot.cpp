@@ -9,6 +9,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -330,38 +331,16 @@ std::string find_program(const std::string& name) {
   return {};
 }
 
-void plot_trace(const PlotOptions& options) {
-  if (options.out_path.empty()) throw InputError("--out", "required: the PNG to write");
-  json spec;
-  if (options.kind == PlotKind::kIncline || options.kind == PlotKind::kTurntable) {
-    spec = reference_spec(options.reference);
-    const std::string expected = options.kind == PlotKind::kIncline ? "incline" : "turntable";
-    if (spec["type"] != expected) {
-      throw InputError("--reference", "got " + spec["type"].dump() + ", expected \"" + expected +
-                                          "\" for --kind " + expected);
-    }
-  }
-  Trace trace = read_trace_csv(options.trace_path);
-  const std::string program = find_program(options.gnuplot);
-  if (program.empty()) {
-    throw std::runtime_error("gnuplot not found (looked for \"" + options.gnuplot +
-                             "\" on PATH): install the Debian package gnuplot-nox "
-                             "(tools/setup does)");
-  }
-  TempDir dir;
-  std::string script;
-  switch (options.kind) {
-    case PlotKind::kSeries: script = series_plot(trace, options.body, dir.path()); break;
-    case PlotKind::kTop: script = top_plot(trace, dir.path()); break;
-    case PlotKind::kIncline: script = incline_plot(trace, spec, dir.path()); break;
-    case PlotKind::kTurntable: script = turntable_plot(trace, spec, dir.path()); break;
-  }
-  const fs::path out = fs::absolute(options.out_path);
+namespace {
+// Writes the script into dir, runs gnuplot on it and renames the PNG over `out_path` only when
+// gnuplot succeeded.
+void render(const std::string& program, const TempDir& dir, const std::string& script, int height,
+            const std::string& out_path) {
+  const fs::path out = fs::absolute(out_path);
   const fs::path temp_png = out.string() + ".tmp-" + std::to_string(::getpid()) + ".png";
   {
     std::ofstream gp(dir.path() / "plot.gp");
-    gp << terminal(options.kind == PlotKind::kIncline ? 1100 : 800)
-       << "set encoding utf8\nset output " << quoted(temp_png.string()) << "\n"
+    gp << terminal(height) << "set encoding utf8\nset output " << quoted(temp_png.string()) << "\n"
        << "cd " << quoted(dir.path().string()) << "\n"
        << script << "unset output\n";
     if (!gp) throw std::runtime_error("cannot write the gnuplot script in " + dir.path().string());
@@ -375,6 +354,124 @@ void plot_trace(const PlotOptions& options) {
     throw std::runtime_error("gnuplot failed (status " + std::to_string(status) + "): " + messages);
   }
   fs::rename(temp_png, out);
+}
+
+std::string require_gnuplot(const std::string& name) {
+  const std::string program = find_program(name);
+  if (program.empty()) {
+    throw std::runtime_error("gnuplot not found (looked for \"" + name +
+                             "\" on PATH): install the Debian package gnuplot-nox "
+                             "(tools/setup does)");
+  }
+  return program;
+}
+
+}  // namespace
+
+void plot_trace(const PlotOptions& options) {
+  if (options.out_path.empty()) throw InputError("--out", "required: the PNG to write");
+  json spec;
+  if (options.kind == PlotKind::kIncline || options.kind == PlotKind::kTurntable) {
+    spec = reference_spec(options.reference);
+    const std::string expected = options.kind == PlotKind::kIncline ? "incline" : "turntable";
+    if (spec["type"] != expected) {
+      throw InputError("--reference", "got " + spec["type"].dump() + ", expected \"" + expected +
+                                          "\" for --kind " + expected);
+    }
+  }
+  Trace trace = read_trace_csv(options.trace_path);
+  const std::string program = require_gnuplot(options.gnuplot);
+  TempDir dir;
+  std::string script;
+  switch (options.kind) {
+    case PlotKind::kSeries: script = series_plot(trace, options.body, dir.path()); break;
+    case PlotKind::kTop: script = top_plot(trace, dir.path()); break;
+    case PlotKind::kIncline: script = incline_plot(trace, spec, dir.path()); break;
+    case PlotKind::kTurntable: script = turntable_plot(trace, spec, dir.path()); break;
+  }
+  render(program, dir, script, options.kind == PlotKind::kIncline ? 1100 : 800, options.out_path);
+}
+
+std::vector<std::size_t> pareto_front(const std::vector<ParetoPoint>& points) {
+  std::vector<std::size_t> order;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (std::isfinite(points[i].cpu_s) && std::isfinite(points[i].error)) order.push_back(i);
+  }
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    if (points[a].cpu_s != points[b].cpu_s) return points[a].cpu_s < points[b].cpu_s;
+    return points[a].error < points[b].error;
+  });
+  std::vector<std::size_t> front;
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t i : order) {
+    if (points[i].error < best) {
+      front.push_back(i);
+      best = points[i].error;
+    }
+  }
+  return front;
+}
+
+void plot_pareto(const std::vector<ParetoPoint>& points, const std::string& title,
+                 const std::string& out_path, const std::string& gnuplot) {
+  if (out_path.empty()) throw InputError("--plot", "expected the PNG to write");
+  // Logarithmic axes: an error of exactly 0 is drawn at the floor below the smallest non-zero
+  // error (and said so in the key); non-finite points are left out.
+  double smallest = std::numeric_limits<double>::infinity();
+  for (const ParetoPoint& p : points) {
+    if (p.error > 0.0 && std::isfinite(p.error)) smallest = std::min(smallest, p.error);
+  }
+  const double floor = std::isfinite(smallest) ? smallest / 10.0 : 1e-16;
+  std::vector<ParetoPoint> drawn;
+  std::size_t zeros = 0, skipped = 0;
+  for (const ParetoPoint& p : points) {
+    if (!std::isfinite(p.error) || !(p.cpu_s > 0.0) || !std::isfinite(p.cpu_s)) {
+      ++skipped;
+      continue;
+    }
+    ParetoPoint q = p;
+    if (q.error == 0.0) {
+      q.error = floor;
+      ++zeros;
+    }
+    drawn.push_back(q);
+  }
+  if (drawn.empty()) {
+    throw std::runtime_error("nothing to plot: no combination has a finite error and CPU time");
+  }
+  const std::string program = require_gnuplot(gnuplot);
+  TempDir dir;
+  {
+    std::ofstream data(dir.path() / "data.dat");
+    data << "# cpu_s error label\n";
+    for (const ParetoPoint& p : drawn) {
+      put(data, p.cpu_s);
+      data << ' ';
+      put(data, std::abs(p.error));
+      data << " \"" << p.label << "\"\n";
+    }
+    data << "\n\n";
+    for (std::size_t i : pareto_front(drawn)) {
+      put(data, drawn[i].cpu_s);
+      data << ' ';
+      put(data, std::abs(drawn[i].error));
+      data << '\n';
+    }
+    if (!data) throw std::runtime_error("cannot write the plot data in " + dir.path().string());
+  }
+  std::ostringstream gp;
+  std::string note;
+  if (zeros > 0) note += ", " + std::to_string(zeros) + " zero errors drawn at the floor";
+  if (skipped > 0) note += ", " + std::to_string(skipped) + " without a finite error left out";
+  gp << "set title " << quoted(title + note) << " noenhanced\n"
+     << "set logscale xy\nset format x '10^{%L}'\nset format y '10^{%L}'\n"
+     << "set xlabel 'CPU time per run [s]'\nset ylabel 'relative error'\n"
+     << "set grid xtics ytics mxtics mytics lc rgb '#e0e0e0'\nset key top right\n"
+     << "set offsets graph 0.05, graph 0.05, graph 0.05, graph 0.05\n"
+     << "plot 'data.dat' index 1 w steps lw 2 lc rgb '#c00000' t 'Pareto front', "
+        "'' index 0 u 1:2 w p pt 7 ps 1.2 lc rgb '#0060c0' t 'combination', "
+        "'' index 0 u 1:2:3 w labels offset 0.8,0.6 font ',8' noenhanced notitle\n";
+  render(program, dir, gp.str(), 800, out_path);
 }
 
 }  // namespace palpable::tools

@@ -5,7 +5,9 @@
 // leaves no partial picture.
 #include "tools/lib/compare.hpp"
 
+#include <cstddef>
 #include <string>
+#include <vector>
 
 namespace palpable::tools {
 
@@ -34,5 +36,21 @@ std::string find_program(const std::string& name);
 // Draws the plot. Throws InputError for bad input, std::runtime_error if gnuplot is missing or
 // fails (its messages included).
 void plot_trace(const PlotOptions& options);
+
+// One point of a cost/accuracy plot.
+struct ParetoPoint {
+  double cpu_s = 0.0;
+  double error = 0.0;
+  std::string label;  // drawn beside the point (a combination index)
+};
+
+// The indices of the points on the Pareto front (no other point has both a lower CPU time and a
+// lower error), in order of increasing CPU time; non-finite points are never on it.
+std::vector<std::size_t> pareto_front(const std::vector<ParetoPoint>& points);
+
+// Draws error (log) against CPU time (log), one point per entry, the Pareto front joined as a
+// staircase. Same atomicity and errors as plot_trace.
+void plot_pareto(const std::vector<ParetoPoint>& points, const std::string& title,
+                 const std::string& out_path, const std::string& gnuplot = "gnuplot");
 
 }  // namespace palpable::tools

@@ -1,0 +1,665 @@
+#include "tools/lib/sweep.hpp"
+
+#include "core/check.hpp"
+#include "scenarios/scene.hpp"
+#include "tools/lib/plot.hpp"
+
+#include <poll.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <limits>
+#include <map>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+namespace palpable::tools {
+
+using nlohmann::json;
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// The columns every table starts and ends its fixed part with.
+const std::vector<std::string> kLeading{"combination", "combinations"};
+const std::vector<std::string> kMeasured{"error", "cpu_s", "events", "collisions",
+                                         "microcollisions"};
+
+std::string trim(const std::string& text) {
+  const auto first = text.find_first_not_of(" \t");
+  if (first == std::string::npos) return {};
+  return text.substr(first, text.find_last_not_of(" \t") - first + 1);
+}
+
+bool parse_size(const std::string& text, std::size_t* value) {
+  if (text.empty() || text.size() > 9 ||
+      text.find_first_not_of("0123456789") != std::string::npos) {
+    return false;
+  }
+  *value = std::stoul(text);
+  return true;
+}
+
+// The shortest text that reads back as the same double.
+std::string number_text(double x) {
+  if (std::isnan(x)) return "nan";
+  if (std::isinf(x)) return x > 0 ? "inf" : "-inf";
+  return json(x).dump();
+}
+
+// A figure's cell: numbers at round-trip precision, strings as they are, null empty.
+std::string cell_text(const json& value) {
+  if (value.is_null()) return {};
+  if (value.is_string()) return value.get<std::string>();
+  if (value.is_boolean()) return value.get<bool>() ? "true" : "false";
+  if (value.is_number_integer()) return value.dump();
+  if (value.is_number()) return number_text(value.get<double>());
+  return value.dump();
+}
+
+// Scalar figures by column name: arrays become name_0, name_1, ...; objects name.key.
+void flatten(const std::string& name, const json& value, std::map<std::string, std::string>* out) {
+  if (value.is_array()) {
+    for (std::size_t i = 0; i < value.size(); ++i) {
+      flatten(name + "_" + std::to_string(i), value[i], out);
+    }
+  } else if (value.is_object()) {
+    for (auto it = value.begin(); it != value.end(); ++it) {
+      flatten(name + "." + it.key(), it.value(), out);
+    }
+  } else {
+    (*out)[name] = cell_text(value);
+  }
+}
+
+double figure(const json& reference, const std::string& key) {
+  auto it = reference.find(key);
+  if (it == reference.end() || !it->is_number()) return kNaN;
+  return it->get<double>();
+}
+
+// max(|a|, |b|), NaN if either is NaN (a figure the error needs is missing).
+double worst(double a, double b) {
+  if (std::isnan(a) || std::isnan(b)) return kNaN;
+  return std::max(std::abs(a), std::abs(b));
+}
+
+// One combination's measurement, as JSON so that a forked worker can send it through a pipe and
+// the in-process path reads exactly the same thing.
+json run_combination(const SweepOptions& options, std::size_t index) {
+  RunOptions run;
+  run.scene_path = options.scene_path;
+  run.overrides = options.overrides;
+  const std::vector<std::size_t> digits = combination_digits(options.parameters, index);
+  for (std::size_t p = 0; p < options.parameters.size(); ++p) {
+    run.overrides.push_back(options.parameters[p].pointer + "=" +
+                            options.parameters[p].values[digits[p]]);
+  }
+  run.end_time = options.end_time;
+  std::vector<double> cpu;
+  json first;
+  for (int r = 0; r < options.repeat; ++r) {
+    RunResult result = run_scene(run);
+    cpu.push_back(result.cpu_time_s);
+    json measured = {{"events", result.stats.events},
+                     {"collisions", result.stats.collisions},
+                     {"microcollisions", result.stats.microcollisions},
+                     {"reference", result.reference}};
+    if (r == 0) {
+      first = measured;
+    } else if (measured != first) {
+      // The simulation is deterministic: repeats may differ in their timings only.
+      throw std::runtime_error("combination " + std::to_string(index) + ": repeat " +
+                               std::to_string(r + 1) + " differs from the first (" +
+                               measured.dump() + " against " + first.dump() + ")");
+    }
+  }
+  std::sort(cpu.begin(), cpu.end());
+  const std::size_t n = cpu.size();
+  first["cpu_s"] = n % 2 == 1 ? cpu[n / 2] : 0.5 * (cpu[n / 2 - 1] + cpu[n / 2]);
+  return first;
+}
+
+// A failure inside a worker, carried to the parent as JSON and rethrown there with its type.
+json failure(const std::exception& e, bool input) {
+  return json{{"failed", e.what()}, {"input_error", input}};
+}
+
+void rethrow_if_failed(const json& measured) {
+  auto it = measured.find("failed");
+  if (it == measured.end()) return;
+  if (measured.value("input_error", false)) throw InputError("", it->get<std::string>());
+  throw std::runtime_error(it->get<std::string>());
+}
+
+json run_combination_caught(const SweepOptions& options, std::size_t index) {
+  try {
+    return run_combination(options, index);
+  } catch (const InputError& e) {
+    return failure(e, true);
+  } catch (const std::exception& e) {
+    return failure(e, false);
+  }
+}
+
+class Progress {
+ public:
+  Progress(bool enabled, std::size_t total) : enabled_(enabled), total_(total) {}
+  void done() {
+    ++done_;
+    if (enabled_) {
+      std::cerr << "\rsweep: " << done_ << " / " << total_ << " combinations" << std::flush;
+    }
+  }
+  ~Progress() {
+    if (enabled_ && done_ > 0) std::cerr << "\r" << std::string(50, ' ') << "\r" << std::flush;
+  }
+
+ private:
+  bool enabled_;
+  std::size_t total_;
+  std::size_t done_ = 0;
+};
+
+// Runs `indices` in up to `jobs` forked processes at once; each writes its JSON result into a
+// pipe the parent drains (poll) before reaping it. Results come back in the order of `indices`.
+std::vector<json> run_forked(const SweepOptions& options, const std::vector<std::size_t>& indices,
+                             Progress* progress) {
+  struct Worker {
+    std::size_t slot;
+    int fd;
+    std::string output;
+  };
+  std::vector<json> results(indices.size());
+  std::map<pid_t, Worker> running;
+  auto finish_one = [&] {
+    while (true) {
+      std::vector<pollfd> fds;
+      std::vector<pid_t> pids;
+      for (auto& [pid, w] : running) {
+        fds.push_back(pollfd{w.fd, POLLIN, 0});
+        pids.push_back(pid);
+      }
+      if (::poll(fds.data(), fds.size(), -1) < 0) {
+        if (errno == EINTR) continue;
+        throw std::runtime_error("sweep: poll failed");
+      }
+      for (std::size_t i = 0; i < fds.size(); ++i) {
+        if (fds[i].revents == 0) continue;
+        Worker& w = running.at(pids[i]);
+        char buffer[4096];
+        const ssize_t n = ::read(w.fd, buffer, sizeof buffer);
+        if (n < 0 && errno == EINTR) continue;
+        if (n > 0) {
+          w.output.append(buffer, static_cast<std::size_t>(n));
+          continue;
+        }
+        ::close(w.fd);
+        int status = 0;
+        while (::waitpid(pids[i], &status, 0) < 0 && errno == EINTR) {
+        }
+        const std::size_t slot = w.slot;
+        const std::string output = std::move(w.output);
+        running.erase(pids[i]);
+        if (!WIFEXITED(status) || WEXITSTATUS(status) != 0 || output.empty()) {
+          throw std::runtime_error("sweep: the worker for combination " +
+                                   std::to_string(indices[slot]) + " died (status " +
+                                   std::to_string(status) + ")");
+        }
+        results[slot] = json::parse(output);
+        rethrow_if_failed(results[slot]);
+        progress->done();
+        return;
+      }
+    }
+  };
+  try {
+    for (std::size_t slot = 0; slot < indices.size(); ++slot) {
+      while (running.size() >= static_cast<std::size_t>(options.jobs)) finish_one();
+      int fds[2];
+      if (::pipe(fds) != 0) throw std::runtime_error("sweep: cannot create a pipe");
+      std::cout.flush();
+      std::cerr.flush();
+      std::fflush(nullptr);
+      const pid_t pid = ::fork();
+      if (pid < 0) throw std::runtime_error("sweep: cannot fork a worker");
+      if (pid == 0) {
+        ::close(fds[0]);
+        const std::string text = run_combination_caught(options, indices[slot]).dump();
+        std::size_t written = 0;
+        while (written < text.size()) {
+          const ssize_t n = ::write(fds[1], text.data() + written, text.size() - written);
+          if (n < 0 && errno == EINTR) continue;
+          if (n <= 0) ::_exit(1);
+          written += static_cast<std::size_t>(n);
+        }
+        ::_exit(0);
+      }
+      ::close(fds[1]);
+      running.emplace(pid, Worker{slot, fds[0], {}});
+    }
+    while (!running.empty()) finish_one();
+  } catch (...) {
+    for (auto& [pid, w] : running) {
+      ::kill(pid, SIGTERM);
+      ::close(w.fd);
+      int status = 0;
+      ::waitpid(pid, &status, 0);
+    }
+    throw;
+  }
+  return results;
+}
+
+// A top-level comma splits values; commas inside [], {} or "" do not.
+std::vector<std::string> split_values(const std::string& text) {
+  std::vector<std::string> values;
+  std::string current;
+  int depth = 0;
+  bool in_string = false;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (in_string) {
+      if (c == '\\' && i + 1 < text.size()) {
+        current += c;
+        current += text[++i];
+        continue;
+      }
+      if (c == '"') in_string = false;
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      ++depth;
+    } else if (c == ']' || c == '}') {
+      --depth;
+    } else if (c == ',' && depth == 0) {
+      values.push_back(trim(current));
+      current.clear();
+      continue;
+    }
+    current += c;
+  }
+  values.push_back(trim(current));
+  return values;
+}
+
+std::vector<std::string> split_csv_line(const std::string& line, const std::string& where) {
+  std::vector<std::string> cells;
+  std::string current;
+  bool quoted = false;
+  for (std::size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (quoted) {
+      if (c == '"') {
+        if (i + 1 < line.size() && line[i + 1] == '"') {
+          current += '"';
+          ++i;
+        } else {
+          quoted = false;
+        }
+      } else {
+        current += c;
+      }
+    } else if (c == '"') {
+      quoted = true;
+    } else if (c == ',') {
+      cells.push_back(current);
+      current.clear();
+    } else {
+      current += c;
+    }
+  }
+  if (quoted) throw InputError(where, "unterminated quoted cell");
+  cells.push_back(current);
+  return cells;
+}
+
+std::string csv_cell(const std::string& text) {
+  if (text.find_first_of(",\"\n") == std::string::npos) return text;
+  std::string out = "\"";
+  for (char c : text) {
+    if (c == '"') out += '"';
+    out += c;
+  }
+  return out + "\"";
+}
+
+// Where the fixed columns are; throws InputError naming `where` if a table lacks them.
+struct Layout {
+  std::size_t first_parameter = 2;
+  std::size_t error = 0;    // index of "error": parameters are [2, error)
+  std::size_t figures = 0;  // index of the first figure column
+};
+
+Layout layout_of(const SweepTable& table, const std::string& where) {
+  const auto& c = table.columns;
+  if (c.size() < kLeading.size() + kMeasured.size() || c[0] != kLeading[0] || c[1] != kLeading[1]) {
+    throw InputError(where,
+                     "not a sweep table (expected the columns combination,combinations,"
+                     "...,error,cpu_s,events,collisions,microcollisions,...)");
+  }
+  auto it = std::find(c.begin() + 2, c.end(), kMeasured[0]);
+  Layout layout;
+  layout.error = static_cast<std::size_t>(it - c.begin());
+  for (std::size_t k = 0; k < kMeasured.size(); ++k) {
+    if (layout.error + k >= c.size() || c[layout.error + k] != kMeasured[k]) {
+      throw InputError(where,
+                       "not a sweep table (expected the columns error,cpu_s,events,"
+                       "collisions,microcollisions after the parameters)");
+    }
+  }
+  layout.figures = layout.error + kMeasured.size();
+  return layout;
+}
+
+}  // namespace
+
+SweepParameter parse_vary(const std::string& text) {
+  const auto eq = text.find('=');
+  if (text.empty() || text[0] != '/' || eq == std::string::npos) {
+    throw InputError("--vary " + text, "expected /json/pointer=v1,v2,... (RFC 6901 pointer)");
+  }
+  SweepParameter parameter;
+  parameter.pointer = text.substr(0, eq);
+  parameter.values = split_values(text.substr(eq + 1));
+  for (const std::string& v : parameter.values) {
+    if (v.empty()) throw InputError("--vary " + text, "an empty value (two commas in a row?)");
+  }
+  return parameter;
+}
+
+Shard parse_shard(const std::string& text) {
+  const auto slash = text.find('/');
+  Shard shard;
+  if (slash == std::string::npos || !parse_size(text.substr(0, slash), &shard.index) ||
+      !parse_size(text.substr(slash + 1), &shard.count) || shard.count == 0 || shard.index == 0 ||
+      shard.index > shard.count) {
+    throw InputError("--shard " + text, "expected K/N with 1 <= K <= N (the K-th of N slices)");
+  }
+  return shard;
+}
+
+std::size_t combination_count(const std::vector<SweepParameter>& parameters) {
+  std::size_t count = 1;
+  for (const SweepParameter& p : parameters) {
+    if (p.values.empty()) throw InputError("--vary " + p.pointer, "expected at least one value");
+    if (count > std::numeric_limits<std::size_t>::max() / p.values.size() ||
+        count * p.values.size() > 100000000) {
+      throw InputError("--vary", "more than 1e8 combinations");
+    }
+    count *= p.values.size();
+  }
+  return count;
+}
+
+std::vector<std::size_t> combination_digits(const std::vector<SweepParameter>& parameters,
+                                            std::size_t index) {
+  std::vector<std::size_t> digits(parameters.size());
+  for (std::size_t p = parameters.size(); p-- > 0;) {
+    digits[p] = index % parameters[p].values.size();
+    index /= parameters[p].values.size();
+  }
+  return digits;
+}
+
+double primary_error(const json& reference) {
+  if (!reference.is_object()) return kNaN;
+  const std::string type = reference.value("reference", std::string());
+  if (type == "incline") {
+    const std::string mode = reference.value("mode", std::string());
+    if (mode == "slide_then_stop") {
+      const double t_error =
+          figure(reference, "stop_time_error_s") / figure(reference, "stop_time_closed_form_s");
+      const double creep =
+          figure(reference, "creep_m") / figure(reference, "stop_distance_closed_form_m");
+      return worst(t_error, creep);
+    }
+    if (mode == "accelerating") return std::abs(figure(reference, "acceleration_rel_error"));
+    if (mode == "stick") return figure(reference, "creep_m");
+    return kNaN;
+  }
+  if (type == "turntable") {
+    return worst(
+        figure(reference, "rate_rel_error"),
+        figure(reference, "circle_deviation_max_m") / figure(reference, "radius_closed_form_m"));
+  }
+  if (type == "slide_to_roll") {
+    return worst(
+        figure(reference, "roll_time_error_s") / figure(reference, "roll_time_closed_form_s"),
+        figure(reference, "final_speed_rel_error"));
+  }
+  if (type == "bouncing_ball") return std::abs(figure(reference, "apex_height_rel_error_max"));
+  if (type == "impact_1d") {
+    return worst(figure(reference, "velocity_a_rel_error"),
+                 figure(reference, "velocity_b_rel_error"));
+  }
+  return kNaN;
+}
+
+SweepTable run_sweep(const SweepOptions& options) {
+  if (options.scene_path == "-") {
+    throw InputError("scene", "a sweep reads the scene once per run: give a file, not -");
+  }
+  if (options.repeat < 1) throw InputError("--repeat", "expected a whole number >= 1");
+  if (options.jobs < 1) throw InputError("--jobs", "expected a whole number >= 1");
+  if (options.shard.count == 0 || options.shard.index == 0 ||
+      options.shard.index > options.shard.count) {
+    throw InputError("--shard", "expected K/N with 1 <= K <= N");
+  }
+  if (options.end_time && !(*options.end_time > 0.0 && std::isfinite(*options.end_time))) {
+    throw InputError("--end", "expected a positive number of seconds");
+  }
+  std::set<std::string> pointers;
+  for (const SweepParameter& p : options.parameters) {
+    if (!pointers.insert(p.pointer).second) {
+      throw InputError("--vary " + p.pointer, "the same pointer is varied twice");
+    }
+  }
+  const std::size_t total = combination_count(options.parameters);
+
+  // Validate before anything runs: the fixed overrides, then every value of every parameter on
+  // its own (a scene that rejects a value names it and the --vary option).
+  json base = read_json_file(options.scene_path);
+  for (const std::string& assignment : options.overrides) apply_override(base, assignment);
+  scene_from_json(base, options.scene_path);
+  for (const SweepParameter& p : options.parameters) {
+    for (const std::string& value : p.values) {
+      const std::string assignment = p.pointer + "=" + value;
+      try {
+        json document = base;
+        apply_override(document, assignment);
+        scene_from_json(document, options.scene_path);
+      } catch (const InputError& e) {
+        throw InputError("--vary " + assignment, e.what());
+      }
+    }
+  }
+
+  std::vector<std::size_t> indices;
+  for (std::size_t i = options.shard.index - 1; i < total; i += options.shard.count) {
+    indices.push_back(i);
+  }
+  Progress progress(options.progress, indices.size());
+  std::vector<json> measured;
+  if (options.jobs == 1 || indices.size() <= 1) {
+    for (std::size_t i : indices) {
+      measured.push_back(json::parse(run_combination_caught(options, i).dump()));
+      rethrow_if_failed(measured.back());
+      progress.done();
+    }
+  } else {
+    measured = run_forked(options, indices, &progress);
+  }
+  for (const json& m : measured) rethrow_if_failed(m);
+
+  std::vector<std::map<std::string, std::string>> figures(measured.size());
+  std::set<std::string> figure_names;
+  for (std::size_t k = 0; k < measured.size(); ++k) {
+    const json& reference = measured[k]["reference"];
+    if (reference.is_object()) {
+      for (auto it = reference.begin(); it != reference.end(); ++it) {
+        flatten(it.key(), it.value(), &figures[k]);
+      }
+    }
+    for (const auto& [name, value] : figures[k]) figure_names.insert(name);
+  }
+
+  SweepTable table;
+  table.columns = kLeading;
+  for (const SweepParameter& p : options.parameters) table.columns.push_back(p.pointer);
+  table.columns.insert(table.columns.end(), kMeasured.begin(), kMeasured.end());
+  table.columns.insert(table.columns.end(), figure_names.begin(), figure_names.end());
+  for (std::size_t k = 0; k < measured.size(); ++k) {
+    const json& m = measured[k];
+    std::vector<std::string> row{std::to_string(indices[k]), std::to_string(total)};
+    const std::vector<std::size_t> digits = combination_digits(options.parameters, indices[k]);
+    for (std::size_t p = 0; p < options.parameters.size(); ++p) {
+      row.push_back(options.parameters[p].values[digits[p]]);
+    }
+    row.push_back(number_text(primary_error(m["reference"])));
+    row.push_back(number_text(m["cpu_s"].get<double>()));
+    row.push_back(cell_text(m["events"]));
+    row.push_back(cell_text(m["collisions"]));
+    row.push_back(cell_text(m["microcollisions"]));
+    for (const std::string& name : figure_names) {
+      auto it = figures[k].find(name);
+      row.push_back(it == figures[k].end() ? std::string() : it->second);
+    }
+    table.rows.push_back(std::move(row));
+  }
+  return table;
+}
+
+SweepTable merge_sweep_tables(const std::vector<SweepTable>& parts,
+                              const std::vector<std::string>& where) {
+  if (parts.empty()) throw InputError("--merge", "expected at least one sweep table");
+  std::vector<Layout> layouts;
+  for (std::size_t k = 0; k < parts.size(); ++k) layouts.push_back(layout_of(parts[k], where[k]));
+  const std::vector<std::string> parameters(parts[0].columns.begin() + 2,
+                                            parts[0].columns.begin() + layouts[0].error);
+  std::set<std::string> figure_names;
+  for (std::size_t k = 0; k < parts.size(); ++k) {
+    const std::vector<std::string> mine(parts[k].columns.begin() + 2,
+                                        parts[k].columns.begin() + layouts[k].error);
+    if (mine != parameters) {
+      throw InputError(where[k], "its varied parameters differ from those of " + where[0]);
+    }
+    figure_names.insert(parts[k].columns.begin() + layouts[k].figures, parts[k].columns.end());
+  }
+  SweepTable merged;
+  merged.columns = kLeading;
+  merged.columns.insert(merged.columns.end(), parameters.begin(), parameters.end());
+  merged.columns.insert(merged.columns.end(), kMeasured.begin(), kMeasured.end());
+  merged.columns.insert(merged.columns.end(), figure_names.begin(), figure_names.end());
+
+  std::optional<std::size_t> total;
+  std::map<std::size_t, std::pair<std::vector<std::string>, std::string>> rows;
+  for (std::size_t k = 0; k < parts.size(); ++k) {
+    const SweepTable& part = parts[k];
+    for (std::size_t r = 0; r < part.rows.size(); ++r) {
+      const std::vector<std::string>& row = part.rows[r];
+      const std::string here = where[k] + " row " + std::to_string(r + 2);
+      std::size_t index = 0, count = 0;
+      if (row.size() != part.columns.size() || !parse_size(row[0], &index) ||
+          !parse_size(row[1], &count)) {
+        throw InputError(here, "expected " + std::to_string(part.columns.size()) +
+                                   " cells starting with the combination and the total");
+      }
+      if (total && *total != count) {
+        throw InputError(here, "a sweep of " + std::to_string(count) + " combinations, the " +
+                                   "others have " + std::to_string(*total));
+      }
+      total = count;
+      if (index >= count) {
+        throw InputError(here, "combination " + row[0] + " is past the total " + row[1]);
+      }
+      std::vector<std::string> aligned(row.begin(), row.begin() + layouts[k].figures);
+      for (const std::string& name : figure_names) {
+        auto it = std::find(part.columns.begin() + layouts[k].figures, part.columns.end(), name);
+        aligned.push_back(it == part.columns.end() ? std::string()
+                                                   : row[it - part.columns.begin()]);
+      }
+      auto [it, inserted] = rows.emplace(index, std::make_pair(aligned, here));
+      if (!inserted) {
+        throw InputError(
+            here, "combination " + row[0] + " appears twice (also at " + it->second.second + ")");
+      }
+    }
+  }
+  if (!total) throw InputError("--merge", "the tables hold no rows");
+  std::vector<std::size_t> missing;
+  for (std::size_t i = 0; i < *total; ++i) {
+    if (rows.count(i) == 0) missing.push_back(i);
+  }
+  if (!missing.empty()) {
+    std::string list;
+    for (std::size_t k = 0; k < missing.size() && k < 10; ++k) {
+      list += (k ? ", " : "") + std::to_string(missing[k]);
+    }
+    if (missing.size() > 10) list += ", ...";
+    throw InputError("--merge", std::to_string(missing.size()) + " of " + std::to_string(*total) +
+                                    " combinations missing (a shard not given?): " + list);
+  }
+  for (auto& [index, row] : rows) merged.rows.push_back(std::move(row.first));
+  return merged;
+}
+
+void write_sweep_csv(std::ostream& out, const SweepTable& table) {
+  auto line = [&out](const std::vector<std::string>& cells) {
+    for (std::size_t i = 0; i < cells.size(); ++i) out << (i ? "," : "") << csv_cell(cells[i]);
+    out << '\n';
+  };
+  line(table.columns);
+  for (const auto& row : table.rows) line(row);
+}
+
+SweepTable read_sweep_csv(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path, "cannot open the sweep table");
+  SweepTable table;
+  std::string text;
+  if (!std::getline(in, text)) throw InputError(path, "empty file, expected a sweep table");
+  table.columns = split_csv_line(text, path + " row 1");
+  std::size_t number = 1;
+  while (std::getline(in, text)) {
+    ++number;
+    if (text.empty()) continue;
+    table.rows.push_back(split_csv_line(text, path + " row " + std::to_string(number)));
+  }
+  layout_of(table, path);
+  return table;
+}
+
+void plot_sweep(const SweepTable& table, const std::string& png_path, const std::string& title) {
+  const Layout layout = layout_of(table, "--plot");
+  std::vector<ParetoPoint> points;
+  for (const auto& row : table.rows) {
+    ParetoPoint p;
+    auto number = [](const std::string& text) {
+      try {
+        return text.empty() ? kNaN : std::stod(text);
+      } catch (const std::exception&) {
+        return kNaN;
+      }
+    };
+    p.error = number(row[layout.error]);
+    p.cpu_s = number(row[layout.error + 1]);
+    std::string values;
+    for (std::size_t c = layout.first_parameter; c < layout.error; ++c) {
+      values += (values.empty() ? "" : ",") + row[c];
+    }
+    p.label = values.empty() || values.size() > 24 ? "#" + row[0] : values;
+    points.push_back(p);
+  }
+  plot_pareto(points, title, png_path);
+}
+
+}  // namespace palpable::tools
