@@ -624,7 +624,10 @@ struct Simulation::Impl {
       return kInfinity;
     }
     if (!(bound.dt >= 0.0)) return t + floor;  // NaN guard: never stall, never skip
-    return t + std::max(bound.dt, bound.exact ? 0.0 : floor);
+    // The progress floor is applied (capped, so that it never carries a pair through contact)
+    // by the bound itself; here only the resolution of the clock, so that t + dt > t.
+    const double tick = 1e-12 * std::max(1.0, t);
+    return t + std::max(bound.dt, bound.exact ? 0.0 : tick);
   }
 
   DistanceResult query(PairRuntime& p, const BodyState& s1, const BodyState& s2) {
