@@ -474,8 +474,9 @@ TEST_CASE("friction 0, 1e-9, 10, 1e3: a spinning ball landing obliquely creates 
       Run spec;
       spec.world.default_material = Material{mu, e};
       spec.world.add(ground());
-      spec.world.add(sphere_body("ball", 0.05, 0.2, Vec3(0, 0, 0.3), Vec3(2.0, 0.5, 0),
-                                 Vec3(10.0, -30.0, 5.0)));
+      const double radius = 0.05;
+      const Vec3 v0(2.0, 0.5, 0), w0(10.0, -30.0, 5.0);
+      spec.world.add(sphere_body("ball", radius, 0.2, Vec3(0, 0, 0.3), v0, w0));
       spec.t_end = 2.0;
       spec.interval = 0.005;
       const double v_micro = std::sqrt(2.0 * kG * spec.world.settings.envelope_m);
@@ -483,6 +484,23 @@ TEST_CASE("friction 0, 1e-9, 10, 1e3: a spinning ball landing obliquely creates 
       spec.event_cap = static_cast<std::uint64_t>(2000 + 4 * spec.t_end * kG / (2 * v_micro));
       Outcome out = run(spec);
       check_invariants(spec, out, 1e-12 * (std::abs(out.e0) + 1.0));
+      const BodyState& s = out.final_states[1];
+      if (mu == 0.0) {
+        // Frictionless: the horizontal velocity and the spin never change.
+        CHECK((s.v_W.head<2>() - v0.head<2>()).norm() == 0.0);
+        CHECK((s.w_W - w0).norm() == 0.0);
+      } else if (mu >= 10.0) {
+        // Rolling at once: angular momentum about the contact point is conserved, so the final
+        // velocity is (v0 + k R w0 x n) / (1 + k), k = 2/5 (DESIGN.md §6, sliding to rolling).
+        const double k = 0.4;
+        const Vec3 roll = (v0 + k * radius * w0.cross(Vec3::UnitZ())) / (1 + k);
+        const double error = (s.v_W.head<2>() - roll.head<2>()).norm();
+        // The contact point is midway between the closest points, a quarter envelope below the
+        // surface at the usual collision gap of half an envelope: the lever arm is R + eps/4
+        // (measured error 5.17e-4 m/s = eps/4R |roll|). Bound: eps/2R |roll|.
+        CAPTURE(error);
+        CHECK(error <= spec.world.settings.envelope_m / (2 * radius) * roll.norm());
+      }
     }
   }
 }
