@@ -515,6 +515,16 @@ struct Simulation::Impl {
       }
     }
 
+    // The kinetic energy of the dynamic bodies before, for the record: the integrator's
+    // (1/2)(u0 + u').p is that of the impulse at the point it was resolved with, which the
+    // centre-of-pressure rule's modified inertia and its removal of rocking make differ from what
+    // the bodies show (by up to 0.015 J on a 1 kg box at envelope 1e-2).
+    auto kinetic = [](const Body& b) {
+      return b.is_dynamic() ? 0.5 * b.mass.mass * b.state.v_W.squaredNorm() +
+                                  rotational_energy(b.mass, b.state)
+                            : 0.0;
+    };
+    const double kinetic_before = kinetic(b1) + kinetic(b2);
     apply_impulse(p_W, cb1, cb2);
     auto store = [&](Body& b, const ContactBody& cb, const Body& other) {
       if (!b.is_dynamic()) return;
@@ -548,7 +558,7 @@ struct Simulation::Impl {
     record.n_W = c.n_W;
     record.impulse_W = p_W;
     record.approach_speed = -u0_c.z();
-    record.energy_change = result.energy_change;
+    record.energy_change = kinetic(b1) + kinetic(b2) - kinetic_before;
     record.centre_of_pressure = c.centre_of_pressure;
     if (micro) {
       ++sim.stats_.microcollisions;
