@@ -97,8 +97,9 @@ struct Settings {
   // Minimum progress of a time-of-impact bound [s] (DESIGN.md §3, "Progress"): a conservative
   // bound below this floor is raised to it and the raise is counted (ToiBound::floored), so a
   // pair inside the envelope that closes only through rotation cannot stall the scheduler. 0
-  // disables the floor (bounds are then strictly conservative); larger values trade a chance
-  // of stepping past a contact by up to (closing speed) x floor for fewer re-checks.
+  // disables the floor (bounds are then strictly conservative); larger values mean fewer
+  // re-checks. The floor is capped so that it never carries a pair through contact (at most
+  // half an envelope deep when the pair is already inside half an envelope).
   double toi_min_progress_s = 1e-6;
 };
 

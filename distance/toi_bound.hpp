@@ -52,7 +52,8 @@ struct ToiBound {
   bool exact = false;     // dt is the exact time the gap reaches d_target (closed form): the
                           // scheduler needs no recheck before it
   bool floored = false;   // the conservative value was below settings.toi_min_progress_s and was
-                          // raised to it (count these)
+                          // raised to it, or to the time the gap (or d_target, inside the
+                          // target gap) can close, if that is sooner (count these)
   double closing_speed = 0.0;  // b [m/s]
   double closing_accel = 0.0;  // a [m/s^2]
 };

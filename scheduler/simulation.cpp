@@ -457,15 +457,14 @@ struct Simulation::Impl {
   // centre-of-pressure rule, mu times the mean distance of the patch from the centre of pressure;
   // at a point, the material's spinning resistance — and the material's rolling resistance
   // against the in-plane relative rotation. Changes the angular
-  // velocities of cb1 and cb2 (true inertias, not the centre-of-pressure ones); returns the
-  // kinetic energy change [J].
-  double resist_rotation(const Contact& c, const Material& material, double P_n,
-                         const Vec3& pressure_W, ContactBody& cb1, ContactBody& cb2) const {
-    if (!(P_n > 0.0)) return 0.0;
+  // velocities of cb1 and cb2 (true inertias, not the centre-of-pressure ones); the record's
+  // energy change is measured on the bodies and includes what these take out.
+  void resist_rotation(const Contact& c, const Material& material, double P_n,
+                       const Vec3& pressure_W, ContactBody& cb1, ContactBody& cb2) const {
+    if (!(P_n > 0.0)) return;
     ContactBody t1 = c.body1, t2 = c.body2;
     t1.w_W = cb1.w_W;
     t2.w_W = cb2.w_W;
-    double energy = 0.0;
     // About n: Coulomb friction over a patch, or the material's spinning resistance at a point.
     const double torsion_arm =
         c.centre_of_pressure
@@ -474,7 +473,6 @@ struct Simulation::Impl {
     if (torsion_arm > 0.0) {
       const AngularImpulse torsion = resisting_angular_impulse(c.n_W, t1, t2, torsion_arm * P_n);
       apply_angular_impulse(torsion.L_W, t1, t2);
-      energy += torsion.energy_change;
     }
     if (material.rolling_resistance > 0.0) {
       const Vec3 w_rel = t1.w_W - t2.w_W;
@@ -483,12 +481,10 @@ struct Simulation::Impl {
         const AngularImpulse resistance = resisting_angular_impulse(
             rolling.normalized(), t1, t2, material.rolling_resistance * P_n);
         apply_angular_impulse(resistance.L_W, t1, t2);
-        energy += resistance.energy_change;
       }
     }
     cb1.w_W = t1.w_W;
     cb2.w_W = t2.w_W;
-    return energy;
   }
 
   // Resolves the collision and applies it to both bodies; returns the record.
@@ -586,6 +582,16 @@ struct Simulation::Impl {
       }
     }
 
+    // The kinetic energy of the dynamic bodies before, for the record: the integrator's
+    // (1/2)(u0 + u').p is that of the impulse at the point it was resolved with, which the
+    // centre-of-pressure rule's modified inertia and its removal of rocking make differ from what
+    // the bodies show (by up to 0.015 J on a 1 kg box at envelope 1e-2).
+    auto kinetic = [](const Body& b) {
+      return b.is_dynamic() ? 0.5 * b.mass.mass * b.state.v_W.squaredNorm() +
+                                  rotational_energy(b.mass, b.state)
+                            : 0.0;
+    };
+    const double kinetic_before = kinetic(b1) + kinetic(b2);
     apply_impulse(p_W, cb1, cb2);
     if (c.centre_of_pressure) {
       // A face resting on a face does not rock: the pressure over the patch takes out the small
@@ -600,8 +606,7 @@ struct Simulation::Impl {
         cd.w_W -= w_rel - c.n_W * c.n_W.dot(w_rel);
       }
     }
-    const double energy_of_couples =
-        resist_rotation(c, material, p_W.dot(c.n_W), pressure, cb1, cb2);
+    resist_rotation(c, material, p_W.dot(c.n_W), pressure, cb1, cb2);
     auto store = [&](Body& b, const ContactBody& cb) {
       if (!b.is_dynamic()) return;
       b.state.v_W = cb.v_W;
@@ -622,7 +627,7 @@ struct Simulation::Impl {
     record.n_W = c.n_W;
     record.impulse_W = p_W;
     record.approach_speed = -u0_c.z();
-    record.energy_change = result.energy_change + energy_of_couples;
+    record.energy_change = kinetic(b1) + kinetic(b2) - kinetic_before;
     record.centre_of_pressure = c.centre_of_pressure;
     if (micro) {
       ++sim.stats_.microcollisions;
@@ -698,7 +703,10 @@ struct Simulation::Impl {
       return kInfinity;
     }
     if (!(bound.dt >= 0.0)) return t + floor;  // NaN guard: never stall, never skip
-    return t + std::max(bound.dt, bound.exact ? 0.0 : floor);
+    // The progress floor is applied (capped, so that it never carries a pair through contact)
+    // by the bound itself; here only the resolution of the clock, so that t + dt > t.
+    const double tick = 1e-12 * std::max(1.0, t);
+    return t + std::max(bound.dt, bound.exact ? 0.0 : tick);
   }
 
   DistanceResult query(PairRuntime& p, const BodyState& s1, const BodyState& s2) {

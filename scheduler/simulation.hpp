@@ -59,7 +59,7 @@ struct CollisionRecord {
   Vec3 n_W = Vec3::UnitZ();       // contact normal, from b to a
   Vec3 impulse_W = Vec3::Zero();  // impulse on a [N s] (b receives the opposite)
   double approach_speed = 0.0;    // -u_n before the collision [m/s]
-  double energy_change = 0.0;     // [J]
+  double energy_change = 0.0;     // kinetic energy of the two bodies after minus before [J]
   bool centre_of_pressure = false;
 };
 

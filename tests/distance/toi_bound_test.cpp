@@ -292,3 +292,28 @@ TEST_CASE("inside the target gap and receding: back at the present gap after -2b
   block.v_W.z() = -0.04;
   CHECK(toi_bound(block, ground, closest, 5e-5, settings).dt == settings.toi_min_progress_s);
 }
+
+TEST_CASE("the progress floor never carries a pair through contact", "[distance][toi]") {
+  // A box face closing on a fixed plane at 1e4 m/s: the 1e-6 s floor alone would move it 1 cm,
+  // a hundred envelopes. The floor is capped by the time the bound allows to close the whole gap
+  // (outside the target gap) or d_target (inside it).
+  ToiMotion box, ground;
+  box.v_W = Vec3(0.0, 0.0, -1e4);
+  DistanceResult closest;
+  closest.status = ContactStatus::kSeparated;
+  closest.n_W = Vec3::UnitZ();
+  Settings settings;
+  const double d_target = 5e-5;
+  closest.distance = 1e-3;  // the conservative bound is (1e-3 - 5e-5) / 1e4 = 9.5e-8 s
+  ToiBound bound = toi_bound(box, ground, closest, d_target, settings);
+  CHECK(bound.floored);
+  CHECK(bound.dt == Approx(1e-3 / 1e4).epsilon(1e-12));
+  closest.distance = 1e-5;  // inside the target gap, approaching: at most d_target deep
+  bound = toi_bound(box, ground, closest, d_target, settings);
+  CHECK(bound.floored);
+  CHECK(bound.dt == Approx(d_target / 1e4).epsilon(1e-12));
+  // Slow pairs keep the whole floor: at 1 m/s, 1e-6 s closes 1e-6 m < d_target.
+  box.v_W.z() = -1.0;
+  bound = toi_bound(box, ground, closest, d_target, settings);
+  CHECK(bound.dt == settings.toi_min_progress_s);
+}
