@@ -525,6 +525,24 @@ struct Simulation::Impl {
       context.g_n = c.g_n;
       result = resolve_microcollision(K_c, u0_c, params, settings().microcollision_rule, context,
                                       c.v_micro);
+      // On a kinematic surface the slip rate Omega x (v - V) depends on the velocity the
+      // dynamic body flies with, which is the one after this impulse: aim once more with it.
+      const Body* surface = b1.motion == MotionKind::kKinematic
+                                ? &b1
+                                : (b2.motion == MotionKind::kKinematic ? &b2 : nullptr);
+      const bool location_at_centre =
+          c.centre_of_pressure ||
+          std::holds_alternative<Sphere>(*(b1.is_dynamic() ? b1 : b2).shape);
+      if (surface && (b1.is_dynamic() != b2.is_dynamic()) && location_at_centre &&
+          succeeded(result.status)) {
+        const double inv_mass = b1.is_dynamic() ? b1.mass.inv_mass : -b2.mass.inv_mass;
+        const Vec3 dv_W = R_WC * result.p_c * inv_mass;  // body 1 gets +p, body 2 -p
+        const Vec3 da_W = surface->kinematic.angular_velocity_W.cross(dv_W);
+        const Vec3 a2_c = R_WC.transpose() * (c.a_rel_W + (surface == &b1 ? da_W : -da_W));
+        context.a_t_c = Vec2(a2_c.x(), a2_c.y());
+        result = resolve_microcollision(K_c, u0_c, params, settings().microcollision_rule, context,
+                                        c.v_micro);
+      }
     } else {
       result = integrate_collision(K_c, u0_c, params);
     }

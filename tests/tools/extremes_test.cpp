@@ -901,6 +901,10 @@ TEST_CASE("a box resting on a kinematic rotating platter for 1000 s stays on it"
 // differ by Omega^2 |Omega x r| tau^3 / 12 per flight, 4.2e-5 m/s here, as measured after (1).
 TEST_CASE("a box resting on a kinematic rotating platter does not creep",
           "[extremes][long][platter][!mayfail]") {
+  // Known to fail (measured at envelope 1e-4 over 100 s): 0.021 m of creep before the
+  // microcollision aimed with the velocity the box flies with, 0.0042 m after. What remains is
+  // that zero mean slip at the moving contact point is not zero displacement against the
+  // turning surface: Omega^2 |Omega x r| tau^3 / 12 per flight predicts 4.2e-5 m/s.
   const Run spec = platter_run(100.0);
   const Outcome out = run(spec);
   const PlatterFigures f = platter_figures(spec, out);
