@@ -41,9 +41,14 @@ ToiBound toi_bound(const ToiMotion& motion1, const ToiMotion& motion2,
   const double a = bound.closing_accel, b = bound.closing_speed;
   if (delta <= 0.0 && b < 0.0) {
     // Already inside the target gap but receding even with the rotational terms (the flight
-    // after a microcollision): the gap stays above its present value until the closing
-    // acceleration can bring it back, t = -2b/a; never, without one.
-    bound.dt = a > 0.0 ? -2.0 * b / a : kInfinity;
+    // after a microcollision). The gap stays above the parabola d - b t - a t^2 / 2, which is
+    // at least d until it comes back down to d: so until the parabola falls back to d_target if
+    // it rises above it (the gap is then >= d_target, as after any bound), else until it
+    // returns to d, t = -2b/a; never, without a closing acceleration. Aiming at d itself, a
+    // body bounced from a gap of 0 (placed exactly touching) came back to 0 and, by rounding,
+    // into overlap: 1.47 million overlapping queries for a block placed on a ramp.
+    const double disc = b * b + 2.0 * a * delta;
+    bound.dt = a > 0.0 ? (disc >= 0.0 ? (-b + std::sqrt(disc)) / a : -2.0 * b / a) : kInfinity;
     return bound;
   }
   bound.dt = solve_gap_closing(a, b, delta);

@@ -265,10 +265,11 @@ TEST_CASE("the bound never overshoots on 10,000 random ballistic trajectory pair
   CHECK(contacts > 1000);
 }
 
-TEST_CASE("inside the target gap and receding: back at the present gap after -2b/a",
+TEST_CASE("inside the target gap and receding: back down at the target gap, else after -2b/a",
           "[distance][toi]") {
   // A block just lifted off by a microcollision: 3e-5 m above a fixed plane, target 5e-5 m,
-  // rising at 0.04 m/s against gravity's 9.81 along the normal.
+  // rising at 0.04 m/s against gravity's 9.81 along the normal. It rises above the target and
+  // the bound is when it comes back down to it; the gap never falls below 3e-5 before that.
   ToiMotion block, ground;
   block.v_W = Vec3(0.3, 0.0, 0.04);
   block.a_W = kGravity;
@@ -279,12 +280,19 @@ TEST_CASE("inside the target gap and receding: back at the present gap after -2b
   Settings settings;
   ToiBound bound = toi_bound(block, ground, closest, 5e-5, settings);
   CHECK_FALSE(bound.floored);
-  CHECK(bound.dt == Approx(2.0 * 0.04 / 9.81).epsilon(1e-14));
-  // The exact gap 3e-5 + 0.04 t - 9.81 t^2 / 2 stays above 3e-5 until then.
+  auto gap = [](double t) { return 3e-5 + 0.04 * t - 0.5 * 9.81 * t * t; };
+  CHECK(gap(bound.dt) == Approx(5e-5).epsilon(1e-9));
+  CHECK(bound.dt > 0.04 / 9.81);  // on the way down
   for (int k = 1; k < 100; ++k) {
     const double t = bound.dt * k / 100.0;
-    CHECK(3e-5 + 0.04 * t - 0.5 * 9.81 * t * t >= 3e-5);
+    CHECK(gap(t) >= 3e-5);
   }
+  // Rising too slowly to reach the target (peak 3e-5 + 1e-4^2 / 19.62 < 5e-5): back at the
+  // present gap, t = -2b/a.
+  block.v_W.z() = 1e-4;
+  CHECK(toi_bound(block, ground, closest, 5e-5, settings).dt ==
+        Approx(2.0 * 1e-4 / 9.81).epsilon(1e-14));
+  block.v_W.z() = 0.04;
   // Receding without a closing acceleration: never again.
   block.a_W = Vec3::Zero();
   CHECK(toi_bound(block, ground, closest, 5e-5, settings).dt == kInfinity);

@@ -794,9 +794,12 @@ TEST_CASE("face on face: a box landing flat on a box", "[extremes][parallel]") {
     spec.event_cap = static_cast<std::uint64_t>(10000 + 32 * spec.t_end * kG / (2 * v_micro));
     Outcome out = run(spec);
     check_invariants(spec, out, 1e-12 * (std::abs(out.e0) + 1.0));
-    // The upper box stays on the lower one, flat.
+    // The upper box stays on the lower one, flat. Each contact level is a microcollision train:
+    // the gap comes back to about envelope / 2 and rises again, so a resting box rides a few
+    // envelopes above its support. Measured at envelope 1e-4 over the last second of the stack:
+    // lower-to-ground gap 0.85 to 2.2 envelopes, upper-to-lower 0.74 to 2.8 (sum at most 5).
     const BodyState& s = out.final_states[2];
-    CHECK(s.x_W.z() == Approx(2 * half.z() + 0.05).margin(4 * spec.world.settings.envelope_m));
+    CHECK(s.x_W.z() == Approx(2 * half.z() + 0.05).margin(6 * spec.world.settings.envelope_m));
     CHECK(std::abs(s.x_W.x() - 0.02) < 0.01);
   }
 }
