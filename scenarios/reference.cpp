@@ -464,8 +464,14 @@ json compare_impact_1d(const json& spec, const Trace& trace, const std::string& 
 
 std::vector<double> polynomial_fit(const std::vector<double>& t, const std::vector<double>& y,
                                    int degree) {
-  PALPABLE_CHECK(t.size() == y.size() && t.size() > static_cast<std::size_t>(degree),
-                 "polynomial_fit needs more points than the degree");
+  PALPABLE_CHECK(t.size() == y.size(), "polynomial_fit needs as many times as values");
+  if (t.size() <= static_cast<std::size_t>(degree)) {
+    // Data, not a bug: a trace too short or too coarse for the reference's window.
+    throw InputError("trace", "a degree-" + std::to_string(degree) + " fit needs more than " +
+                                  std::to_string(degree) + " samples in its window, got " +
+                                  std::to_string(t.size()) +
+                                  " (run longer or sample more often)");
+  }
   double mean = 0.0;
   for (double x : t) mean += x;
   mean /= static_cast<double>(t.size());

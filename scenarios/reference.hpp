@@ -36,7 +36,8 @@ nlohmann::json compare_with_reference(const nlohmann::json& spec, const Trace& t
                                       const std::string& where);
 
 // Least-squares polynomial fit y ~ sum_k c_k t^k (k = 0..degree), conditioned by centring and
-// scaling t. Returns the coefficients in the unscaled variable t.
+// scaling t. Returns the coefficients in the unscaled variable t. Throws InputError ("trace")
+// with no more samples than the degree.
 std::vector<double> polynomial_fit(const std::vector<double>& t, const std::vector<double>& y,
                                    int degree);
 

@@ -37,6 +37,10 @@ palpable::tools::CommandRegistration registration{
           "--events", options->events_path,
           "Write the collision events CSV (t,kind,body_a,body_b,px,py,pz,nx,ny,nz,jx,jy,jz,"
           "approach_speed,...)");
+      app.add_flag("--strict", options->strict,
+                   "Fail (exit 1, no file written) if the run met numerical trouble: bodies\n"
+                   "overlapping, the retry limit hit, a failed impulse or distance query.\n"
+                   "Without it such a run warns on stderr and exits 0.");
       auto* end_option =
           app.add_option("--end", *end, "End time [s], replacing the scene's end_time");
       app.add_option("--summary-json", *summary_path,
@@ -46,6 +50,10 @@ palpable::tools::CommandRegistration registration{
         options->progress = ::isatty(2) != 0;
         palpable::tools::RunResult result = palpable::tools::run_scene(*options);
         std::cout << palpable::tools::summary_text(result);
+        for (const std::string& trouble : palpable::tools::numerical_trouble(result.stats)) {
+          std::cerr << "palpable: warning: " << options->scene_path << ": " << trouble
+                    << ": the trace may be wrong\n";
+        }
         if (!summary_path->empty()) {
           palpable::tools::AtomicFile out(*summary_path);
           out.stream() << palpable::tools::summary_json(result).dump(2) << "\n";

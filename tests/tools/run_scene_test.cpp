@@ -163,3 +163,43 @@ TEST_CASE("two runs of a scene write byte-identical traces and events", "[tools]
   CHECK(first.size() > 10000);
   CHECK(first == run_once("2"));
 }
+
+TEST_CASE("numerical trouble warns, and with --strict fails leaving no file", "[tools][run]") {
+  // retry_limit = 1: the chain of balls has pairs colliding again at one instant (each ball
+  // struck while touching its neighbours), so the limit is hit and those pairs are skipped.
+  RunOptions options;
+  options.scene_path = scene("chain_of_balls.json");
+  options.overrides = {"/settings/retry_limit=1"};
+  options.trace_path = "run_scene_test_strict.csv";
+  const RunResult r = run_scene(options);
+  REQUIRE(r.stats.retry_limit_hits > 0);
+  const auto trouble = palpable::tools::numerical_trouble(r.stats);
+  REQUIRE(trouble.size() == 1);
+  CHECK(trouble[0].find("retry_limit") != std::string::npos);
+  CHECK(exists(options.trace_path));
+  std::remove(options.trace_path.c_str());
+
+  options.strict = true;
+  CHECK_THROWS_WITH(run_scene(options), Catch::Contains("--strict") &&
+                                            Catch::Contains("retry_limit") &&
+                                            Catch::Contains("no file written"));
+  CHECK_FALSE(exists(options.trace_path));
+
+  // A clean run has none, and --strict changes nothing.
+  options.overrides.clear();
+  CHECK(palpable::tools::numerical_trouble(run_scene(options).stats).empty());
+  CHECK(exists(options.trace_path));
+  std::remove(options.trace_path.c_str());
+}
+
+TEST_CASE("a trace too short for its reference is run and says the comparison is unavailable",
+          "[tools][run]") {
+  RunOptions options;
+  options.scene_path = scene("block_on_ramp_accelerating.json");
+  options.end_time = 0.01;  // two samples: no quadratic fit
+  const RunResult r = run_scene(options);
+  REQUIRE(r.reference.contains("unavailable"));
+  CHECK(r.reference["unavailable"].get<std::string>().find("fit needs more than 2 samples") !=
+        std::string::npos);
+  CHECK(r.stats.events > 0);
+}

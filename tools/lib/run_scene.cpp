@@ -11,6 +11,7 @@
 #include <iostream>
 #include <memory>
 #include <sstream>
+#include <stdexcept>
 
 #include <unistd.h>
 
@@ -125,12 +126,37 @@ RunResult run_scene(const RunOptions& options) {
   result.stats = simulation.stats();
 
   if (!scene.reference.is_null() && !result.trace.times.empty()) {
-    result.reference =
-        compare_with_reference(scene.reference, result.trace, scene.source + ":/reference");
+    try {
+      result.reference =
+          compare_with_reference(scene.reference, result.trace, scene.source + ":/reference");
+    } catch (const InputError& e) {
+      // The run is sound; only its trace cannot be compared (too short, too coarse): say so.
+      result.reference = {{"unavailable", e.what()}};
+    }
+  }
+  if (options.strict) {
+    const std::vector<std::string> trouble = numerical_trouble(result.stats);
+    if (!trouble.empty()) {
+      throw std::runtime_error(scene.source + ": --strict: " + trouble.front() +
+                               " (no file written)");
+    }
   }
   if (trace_file) trace_file->commit();
   if (events_file) events_file->commit();
   return result;
+}
+
+std::vector<std::string> numerical_trouble(const SimulationStats& s) {
+  std::vector<std::string> out;
+  auto add = [&](std::uint64_t n, const std::string& what) {
+    if (n > 0) out.push_back(std::to_string(n) + " " + what);
+  };
+  add(s.penetrations, "closest-feature queries found bodies overlapping");
+  add(s.retry_limit_hits,
+      "times a pair kept colliding at one instant past settings.retry_limit and was skipped");
+  add(s.impulse_failures, "collisions whose impulse integration failed (frictionless fallback)");
+  add(s.distance_failures, "closest-feature walks hit settings.distance_max_steps");
+  return out;
 }
 
 nlohmann::json summary_json(const RunResult& r) {

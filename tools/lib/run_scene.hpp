@@ -21,6 +21,8 @@ struct RunOptions {
   std::string trace_path;              // empty: no trace file
   std::string events_path;             // empty: no events file
   bool progress = false;               // progress on stderr
+  // Numerical trouble (see numerical_trouble) fails the run: it throws and writes no file.
+  bool strict = false;
 };
 
 struct RunResult {
@@ -34,6 +36,11 @@ struct RunResult {
 
 // Throws InputError for bad input (before anything runs; no file is written).
 RunResult run_scene(const RunOptions& options);
+
+// What in a run's statistics means its trace may be wrong, one sentence each: overlapping bodies,
+// a pair stuck colliding at one instant past the retry limit, failed impulse integrations or
+// closest-feature walks. Empty for a clean run.
+std::vector<std::string> numerical_trouble(const SimulationStats& stats);
 
 // The summary as JSON: scene, virtual and wall time, statistics, reference figures.
 nlohmann::json summary_json(const RunResult& result);
