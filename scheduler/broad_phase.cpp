@@ -36,6 +36,11 @@ int level_of(const Aabb& box) {
   return level;
 }
 
+// The block (8 x 8 x 8 cells) of a cell index, rounding down.
+std::int64_t block_of(std::int64_t i) {
+  return i >= 0 ? i / 8 : -((-i + 7) / 8);
+}
+
 double cell_index(double x, int level) {
   return std::clamp(std::floor(std::ldexp(x, -level)), -kIndexLimit, kIndexLimit);
 }
@@ -43,8 +48,7 @@ double cell_index(double x, int level) {
 }  // namespace
 
 std::size_t BroadPhase::CellKeyHash::operator()(const CellKey& c) const {
-  std::uint64_t h = static_cast<std::uint64_t>(static_cast<std::int64_t>(c.level));
-  h = h * 0x9E3779B97F4A7C15ull ^ static_cast<std::uint64_t>(c.i);
+  std::uint64_t h = static_cast<std::uint64_t>(c.i) * 0x9E3779B97F4A7C15ull;
   h = h * 0xC2B2AE3D27D4EB4Full ^ static_cast<std::uint64_t>(c.j);
   h = h * 0x165667B19E3779F9ull ^ static_cast<std::uint64_t>(c.k);
   return static_cast<std::size_t>(h ^ (h >> 29));
@@ -55,7 +59,11 @@ void BroadPhase::set(std::uint32_t id, const Aabb& box) {
     items_.resize(id + 1);
     visited_.resize(id + 1, 0);
   }
-  if (items_[id].present) remove(id);
+  if (items_[id].present) {
+    const Aabb& old = items_[id].box;
+    if (old.min_W == box.min_W && old.max_W == box.max_W) return;  // a resting body: no change
+    remove(id);
+  }
   Item& item = items_[id];
   item.box = box;
   item.present = true;
@@ -82,28 +90,27 @@ void BroadPhase::remove(std::uint32_t id) {
   PALPABLE_CHECK(contains(id), "removing an item the broad phase does not hold");
   Item& item = items_[id];
   std::vector<std::uint32_t>* list = &unbounded_;
-  auto level_it = levels_.end();
   if (!item.unbounded) {
     erase_cells(id);
-    level_it = levels_.find(item.level);
-    list = &level_it->second.items;
+    list = &levels_.at(item.level).items;
   }
   // Swap-remove from its list, keeping the moved item's position current.
   const std::uint32_t last = list->back();
   (*list)[item.list_position] = last;
   items_[last].list_position = item.list_position;
   list->pop_back();
-  if (level_it != levels_.end() && list->empty()) levels_.erase(level_it);
   item.present = false;
   --size_;
 }
 
 void BroadPhase::insert_cells(std::uint32_t id) {
   const Item& item = items_[id];
+  Level& level = levels_[item.level];
   for (std::int64_t i = item.lo[0]; i <= item.hi[0]; ++i) {
     for (std::int64_t j = item.lo[1]; j <= item.hi[1]; ++j) {
       for (std::int64_t k = item.lo[2]; k <= item.hi[2]; ++k) {
-        cells_[CellKey{item.level, i, j, k}].push_back(id);
+        level.cells[CellKey{i, j, k}].push_back(id);
+        ++level.blocks[CellKey{block_of(i), block_of(j), block_of(k)}];
       }
     }
   }
@@ -111,13 +118,29 @@ void BroadPhase::insert_cells(std::uint32_t id) {
 
 void BroadPhase::erase_cells(std::uint32_t id) {
   const Item& item = items_[id];
+  Level& level = levels_.at(item.level);
   for (std::int64_t i = item.lo[0]; i <= item.hi[0]; ++i) {
     for (std::int64_t j = item.lo[1]; j <= item.hi[1]; ++j) {
       for (std::int64_t k = item.lo[2]; k <= item.hi[2]; ++k) {
-        auto it = cells_.find(CellKey{item.level, i, j, k});
+        auto it = level.cells.find(CellKey{i, j, k});
         auto& cell = it->second;
         cell.erase(std::find(cell.begin(), cell.end(), id));
-        if (cell.empty()) cells_.erase(it);
+        if (cell.empty()) level.cells.erase(it);
+        auto block = level.blocks.find(CellKey{block_of(i), block_of(j), block_of(k)});
+        if (--block->second == 0) level.blocks.erase(block);
+      }
+    }
+  }
+}
+
+void BroadPhase::visit_cells(const Level& level, const std::int64_t lo[3], const std::int64_t hi[3],
+                             const Aabb& box, std::uint32_t self, std::vector<std::uint32_t>& out) {
+  for (std::int64_t i = lo[0]; i <= hi[0]; ++i) {
+    for (std::int64_t j = lo[1]; j <= hi[1]; ++j) {
+      for (std::int64_t k = lo[2]; k <= hi[2]; ++k) {
+        auto it = level.cells.find(CellKey{i, j, k});
+        if (it == level.cells.end()) continue;
+        for (std::uint32_t id : it->second) test(id, box, self, out);
       }
     }
   }
@@ -140,6 +163,7 @@ void BroadPhase::query(const Aabb& box, std::uint32_t self, std::vector<std::uin
   const std::size_t first = out.size();
   const bool finite = finite_box(box);
   for (const auto& [level, contents] : levels_) {
+    if (contents.items.empty()) continue;
     double lo[3], hi[3];
     double cells = 1.0;
     for (int a = 0; a < 3 && finite; ++a) {
@@ -151,15 +175,32 @@ void BroadPhase::query(const Aabb& box, std::uint32_t self, std::vector<std::uin
       for (std::uint32_t id : contents.items) test(id, box, self, out);
       continue;
     }
-    const std::int64_t i0 = static_cast<std::int64_t>(lo[0]), i1 = static_cast<std::int64_t>(hi[0]);
-    const std::int64_t j0 = static_cast<std::int64_t>(lo[1]), j1 = static_cast<std::int64_t>(hi[1]);
-    const std::int64_t k0 = static_cast<std::int64_t>(lo[2]), k1 = static_cast<std::int64_t>(hi[2]);
-    for (std::int64_t i = i0; i <= i1; ++i) {
-      for (std::int64_t j = j0; j <= j1; ++j) {
-        for (std::int64_t k = k0; k <= k1; ++k) {
-          auto it = cells_.find(CellKey{level, i, j, k});
-          if (it == cells_.end()) continue;
-          for (std::uint32_t id : it->second) test(id, box, self, out);
+    std::int64_t lo_i[3], hi_i[3];
+    for (int a = 0; a < 3; ++a) {
+      lo_i[a] = static_cast<std::int64_t>(lo[a]);
+      hi_i[a] = static_cast<std::int64_t>(hi[a]);
+    }
+    if (cells <= 8.0) {
+      visit_cells(contents, lo_i, hi_i, box, self, out);
+      continue;
+    }
+    // Many cells: only those of the occupied blocks.
+    std::int64_t b_lo[3], b_hi[3];
+    for (int a = 0; a < 3; ++a) {
+      b_lo[a] = block_of(lo_i[a]);
+      b_hi[a] = block_of(hi_i[a]);
+    }
+    for (std::int64_t bi = b_lo[0]; bi <= b_hi[0]; ++bi) {
+      for (std::int64_t bj = b_lo[1]; bj <= b_hi[1]; ++bj) {
+        for (std::int64_t bk = b_lo[2]; bk <= b_hi[2]; ++bk) {
+          if (contents.blocks.find(CellKey{bi, bj, bk}) == contents.blocks.end()) continue;
+          const std::int64_t block[3] = {bi, bj, bk};
+          std::int64_t c_lo[3], c_hi[3];
+          for (int a = 0; a < 3; ++a) {
+            c_lo[a] = std::max(lo_i[a], 8 * block[a]);
+            c_hi[a] = std::min(hi_i[a], 8 * block[a] + 7);
+          }
+          visit_cells(contents, c_lo, c_hi, box, self, out);
         }
       }
     }

@@ -7,9 +7,11 @@
 // visits, on every level that holds boxes, the cells its box covers there — or, where those cells
 // outnumber the boxes of that level, that level's list — so its cost is the number of nearby boxes
 // (plus the number of occupied levels, a handful: log2 of the ratio of largest to smallest box),
-// not the number of boxes stored. Boxes with an infinite or non-finite coordinate (halfspaces, a
-// halfspace that spins off its own normal) or too far out to index (|x| / 2^L > 2^52) are kept
-// in a separate list that every query tests.
+// not the number of boxes stored. Each level has its own cell table and a coarse table of
+// 8 x 8 x 8-cell blocks: a query spanning many cells of a fine level looks up the blocks first, so
+// a region where that level holds nothing costs a lookup per block, not per cell. Boxes with an
+// infinite or non-finite coordinate (halfspaces, a halfspace that spins off its own normal) or too
+// far out to index (|x| / 2^L > 2^52) are kept in a separate list that every query tests.
 //
 // Exactness: a query reports exactly the items whose stored box overlaps the query box by
 // Aabb::overlaps — the same answer as testing every item — in ascending id order. Moving an
@@ -40,11 +42,8 @@ class BroadPhase {
 
  private:
   struct CellKey {
-    int level;
     std::int64_t i, j, k;
-    bool operator==(const CellKey& o) const {
-      return level == o.level && i == o.i && j == o.j && k == o.k;
-    }
+    bool operator==(const CellKey& o) const { return i == o.i && j == o.j && k == o.k; }
   };
   struct CellKeyHash {
     std::size_t operator()(const CellKey& c) const;
@@ -60,16 +59,20 @@ class BroadPhase {
   };
   struct Level {
     std::vector<std::uint32_t> items;
+    std::unordered_map<CellKey, std::vector<std::uint32_t>, CellKeyHash> cells;
+    std::unordered_map<CellKey, std::uint32_t, CellKeyHash> blocks;  // item-cells per block
   };
 
   void insert_cells(std::uint32_t id);
   void erase_cells(std::uint32_t id);
   void test(std::uint32_t id, const Aabb& box, std::uint32_t self, std::vector<std::uint32_t>& out);
+  // Tests the items of the cells lo..hi (inclusive, per axis) of `level`.
+  void visit_cells(const Level& level, const std::int64_t lo[3], const std::int64_t hi[3],
+                   const Aabb& box, std::uint32_t self, std::vector<std::uint32_t>& out);
 
   std::vector<Item> items_;
   std::vector<std::uint32_t> unbounded_;
-  std::map<int, Level> levels_;  // only levels that hold items
-  std::unordered_map<CellKey, std::vector<std::uint32_t>, CellKeyHash> cells_;
+  std::map<int, Level> levels_;         // every level that ever held an item (kept: no table churn)
   std::vector<std::uint32_t> visited_;  // per id: the query stamp that last tested it
   std::uint32_t stamp_ = 0;
   std::size_t size_ = 0;
