@@ -337,10 +337,13 @@ struct Simulation::Impl {
   }
 
   // After a collision of a and b: both bodies' boxes and pairs, then every pair of either body
-  // re-bounded once (the pair (a, b) itself only once).
+  // re-bounded once (the pair (a, b) itself only once). A fixed body's box never changes, and
+  // every dynamic body overlapping it was paired with it at that body's own last refresh, so
+  // refreshing a fixed body would change nothing - but cost a scan of every dynamic body for a
+  // halfspace, whose box is infinite. It is skipped.
   void refresh_after_collision(BodyId a, BodyId b, double t) {
-    refresh_broad_phase(a, t);
-    refresh_broad_phase(b, t);
+    if (body(a).motion != MotionKind::kFixed) refresh_broad_phase(a, t);
+    if (body(b).motion != MotionKind::kFixed) refresh_broad_phase(b, t);
     rebound_pairs(a, t);
     rebound_pairs(b, t, a);
   }
