@@ -162,3 +162,29 @@ TEST_CASE("in a sphere gas every pair check is a collision at an exact time of i
   CHECK(s.pair_checks == s.collisions + s.microcollisions);
   CHECK(s.integration_steps == 0);
 }
+
+TEST_CASE("the broad phase's work per refresh does not grow with the number of spheres",
+          "[tools][gas][cost]") {
+  // 1000 and 8000 spheres at the same density, in six halfspaces: box tests per broad-phase
+  // refresh (two per collision, one per horizon) follow the neighbours, so they stay about
+  // constant (the larger gas has fewer spheres near the walls, hence somewhat more neighbours
+  // each: ~1.25 x measured). A brute-force broad phase would test every body: x 8.
+  double per_refresh[2];
+  int k = 0;
+  for (int n : {1000, 8000}) {
+    GasOptions options;
+    options.count = n;
+    Simulation sim(make_sphere_gas(options), SimulationOptions{});
+    sim.run_until(0.3, nullptr);
+    const SimulationStats a = sim.stats();
+    sim.run_until(0.45, nullptr);
+    const SimulationStats& b = sim.stats();
+    const double refreshes = 2.0 * static_cast<double>(b.collisions - a.collisions) +
+                             static_cast<double>(b.horizon_refreshes - a.horizon_refreshes);
+    per_refresh[k++] = static_cast<double>(b.box_tests - a.box_tests) / refreshes;
+    CAPTURE(n, refreshes, b.box_tests - a.box_tests);
+    REQUIRE(refreshes > 100);
+  }
+  CAPTURE(per_refresh[0], per_refresh[1]);
+  CHECK(per_refresh[1] <= 1.5 * per_refresh[0]);
+}
