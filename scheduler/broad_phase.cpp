@@ -109,7 +109,7 @@ void BroadPhase::insert_cells(std::uint32_t id) {
   for (std::int64_t i = item.lo[0]; i <= item.hi[0]; ++i) {
     for (std::int64_t j = item.lo[1]; j <= item.hi[1]; ++j) {
       for (std::int64_t k = item.lo[2]; k <= item.hi[2]; ++k) {
-        level.cells[CellKey{i, j, k}].push_back(id);
+        level.cells[CellKey{i, j, k}].push_back(CellEntry{item.box, id});
         ++level.blocks[CellKey{block_of(i), block_of(j), block_of(k)}];
       }
     }
@@ -124,7 +124,8 @@ void BroadPhase::erase_cells(std::uint32_t id) {
       for (std::int64_t k = item.lo[2]; k <= item.hi[2]; ++k) {
         auto it = level.cells.find(CellKey{i, j, k});
         auto& cell = it->second;
-        cell.erase(std::find(cell.begin(), cell.end(), id));
+        cell.erase(std::find_if(cell.begin(), cell.end(),
+                                [id](const CellEntry& e) { return e.id == id; }));
         if (cell.empty()) level.cells.erase(it);
         auto block = level.blocks.find(CellKey{block_of(i), block_of(j), block_of(k)});
         if (--block->second == 0) level.blocks.erase(block);
@@ -140,19 +141,19 @@ void BroadPhase::visit_cells(const Level& level, const std::int64_t lo[3], const
       for (std::int64_t k = lo[2]; k <= hi[2]; ++k) {
         auto it = level.cells.find(CellKey{i, j, k});
         if (it == level.cells.end()) continue;
-        for (std::uint32_t id : it->second) test(id, box, self, out);
+        for (const CellEntry& e : it->second) test(e.id, e.box, box, self, out);
       }
     }
   }
 }
 
-void BroadPhase::test(std::uint32_t id, const Aabb& box, std::uint32_t self,
+void BroadPhase::test(std::uint32_t id, const Aabb& stored, const Aabb& box, std::uint32_t self,
                       std::vector<std::uint32_t>& out) {
   if (visited_[id] == stamp_) return;
   visited_[id] = stamp_;
   if (id == self) return;
   ++box_tests_;
-  if (items_[id].box.overlaps(box)) out.push_back(id);
+  if (stored.overlaps(box)) out.push_back(id);
 }
 
 void BroadPhase::query(const Aabb& box, std::uint32_t self, std::vector<std::uint32_t>& out) {
@@ -172,7 +173,7 @@ void BroadPhase::query(const Aabb& box, std::uint32_t self, std::vector<std::uin
       cells *= hi[a] - lo[a] + 1.0;
     }
     if (!finite || cells > static_cast<double>(contents.items.size())) {
-      for (std::uint32_t id : contents.items) test(id, box, self, out);
+      for (std::uint32_t id : contents.items) test(id, items_[id].box, box, self, out);
       continue;
     }
     std::int64_t lo_i[3], hi_i[3];
@@ -205,7 +206,7 @@ void BroadPhase::query(const Aabb& box, std::uint32_t self, std::vector<std::uin
       }
     }
   }
-  for (std::uint32_t id : unbounded_) test(id, box, self, out);
+  for (std::uint32_t id : unbounded_) test(id, items_[id].box, box, self, out);
   std::sort(out.begin() + static_cast<std::ptrdiff_t>(first), out.end());
 }
 

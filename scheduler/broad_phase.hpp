@@ -57,15 +57,22 @@ class BroadPhase {
     std::int64_t hi[3] = {0, 0, 0};
     std::size_t list_position = 0;  // in unbounded_ or in its level's list
   };
+  struct CellEntry {
+    Aabb box;
+    std::uint32_t id;
+  };
   struct Level {
     std::vector<std::uint32_t> items;
-    std::unordered_map<CellKey, std::vector<std::uint32_t>, CellKeyHash> cells;
+    // Each cell holds copies of its items' boxes, so a query reads them in sequence.
+    std::unordered_map<CellKey, std::vector<CellEntry>, CellKeyHash> cells;
     std::unordered_map<CellKey, std::uint32_t, CellKeyHash> blocks;  // item-cells per block
   };
 
   void insert_cells(std::uint32_t id);
   void erase_cells(std::uint32_t id);
-  void test(std::uint32_t id, const Aabb& box, std::uint32_t self, std::vector<std::uint32_t>& out);
+  // Tests item `id`, whose stored box is `stored`, against `box` (once per query).
+  void test(std::uint32_t id, const Aabb& stored, const Aabb& box, std::uint32_t self,
+            std::vector<std::uint32_t>& out);
   // Tests the items of the cells lo..hi (inclusive, per axis) of `level`.
   void visit_cells(const Level& level, const std::int64_t lo[3], const std::int64_t hi[3],
                    const Aabb& box, std::uint32_t self, std::vector<std::uint32_t>& out);
