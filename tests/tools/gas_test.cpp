@@ -1,7 +1,7 @@
 // Cost follows interaction, not scene size (issue 7), on the code-built scenes of tools/lib/gas:
-// idle bodies far away change no event, no query and no broad-phase test of the run; frictionless
-// contacts are closed form (no Runge-Kutta step); sphere pairs are checked once per collision,
-// at their exact time of impact.
+// idle bodies far away change no event and no query of the run, and add no broad-phase test;
+// frictionless contacts are closed form (no Runge-Kutta step); sphere pairs are checked once per
+// collision, at their exact time of impact.
 #include "tools/lib/gas.hpp"
 
 #include "core/mass_properties.hpp"
@@ -69,7 +69,7 @@ void require_same_work(const Run& a, const Run& b) {
 
 }  // namespace
 
-TEST_CASE("10,000 idle bodies far from a gas change no event, query or broad-phase test",
+TEST_CASE("10,000 idle bodies far from a gas change no event or query, add no box test",
           "[tools][gas][cost]") {
   GasOptions options;
   options.count = 64;
