@@ -8,6 +8,7 @@
 #include "impulse/collision_matrix.hpp"
 #include "impulse/contact_torque.hpp"
 #include "impulse/microcollision.hpp"
+#include "scheduler/broad_phase.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -141,6 +142,10 @@ struct Simulation::Impl {
   std::unordered_map<std::uint64_t, std::uint32_t> pair_index;
   EventQueue::EventId sample_event = EventQueue::kNoEvent;
   std::uint64_t next_sample = 0;
+  // The swept boxes, dynamic bodies apart from fixed and kinematic ones: a non-dynamic body
+  // looks only among the dynamic ones, so two non-dynamic bodies are never even compared.
+  BroadPhase dynamic_boxes, static_boxes;
+  std::vector<std::uint32_t> overlapping, partners;  // scratch of refresh_broad_phase
 
   Impl(Simulation& s, QueueImpl impl) : sim(s), queue(impl) {}
 
@@ -163,7 +168,13 @@ struct Simulation::Impl {
 
   // ---------------------------------------------------------------- broad phase
 
+  // Recomputes the swept box of `id` from time t and stores it in the broad phase.
   void refresh_box(BodyId id, double t) {
+    compute_box(id, t);
+    (body(id).is_dynamic() ? dynamic_boxes : static_boxes).set(id.index, bodies[id.index].box);
+  }
+
+  void compute_box(BodyId id, double t) {
     BodyRuntime& rt = bodies[id.index];
     const Body& b = body(id);
     const BodyState s = extrapolate(id, t);
@@ -237,6 +248,8 @@ struct Simulation::Impl {
       index = static_cast<std::uint32_t>(pairs.size());
       pairs.emplace_back();
     }
+    PALPABLE_CHECK(body(a).is_dynamic() || body(b).is_dynamic(),
+                   "a pair of two fixed or kinematic bodies");
     PairRuntime& p = pairs[index];
     p = PairRuntime{};
     p.a = a;
@@ -262,25 +275,49 @@ struct Simulation::Impl {
     free_pairs.push_back(index);
   }
 
+  // Every body whose swept box overlaps that of `id` and that may pair with it (at least one of
+  // the two dynamic), ascending, into `out`.
+  void find_overlaps(BodyId id, std::vector<std::uint32_t>& out) {
+    out.clear();
+    const Aabb& box = bodies[id.index].box;
+    dynamic_boxes.query(box, id.index, out);
+    if (body(id).is_dynamic()) {
+      const auto middle = static_cast<std::ptrdiff_t>(out.size());
+      static_boxes.query(box, id.index, out);
+      std::inplace_merge(out.begin(), out.begin() + middle, out.end());
+    }
+    sim.stats_.box_tests = dynamic_boxes.box_tests() + static_boxes.box_tests();
+  }
+
   // Recomputes the swept box of `id` from time t and brings its pairs up to date: pairs whose
-  // boxes overlap exist (never two non-dynamic bodies), others are dropped. Brute force over the
-  // bodies: O(n) per refresh. The pairs are not re-bounded here (see refresh_body).
+  // boxes overlap exist (never two non-dynamic bodies), others are dropped. The broad phase finds
+  // the overlapping boxes in O(neighbours); the pairs are created and dropped in ascending order
+  // of the other body, so pair order (and with it the event sequence) does not depend on how the
+  // overlaps were found. The pairs are not re-bounded here (see refresh_body).
   void refresh_broad_phase(BodyId id, double t) {
     refresh_box(id, t);
     schedule_horizon(id);
-    const Body& self = body(id);
-    const Aabb& box = bodies[id.index].box;
-    for (std::uint32_t j = 0; j < bodies.size(); ++j) {
-      if (j == id.index) continue;
-      const Body& other = sim.world_.bodies[j];
-      if (!self.is_dynamic() && !other.is_dynamic()) continue;
+    find_overlaps(id, overlapping);
+    partners.clear();
+    for (std::uint32_t index : bodies[id.index].pairs) {
+      const PairRuntime& p = pairs[index];
+      partners.push_back(p.a == id ? p.b.index : p.a.index);
+    }
+    std::sort(partners.begin(), partners.end());
+    auto o = overlapping.begin();
+    auto q = partners.begin();
+    while (o != overlapping.end() || q != partners.end()) {
+      const std::uint32_t j = q == partners.end() || (o != overlapping.end() && *o < *q) ? *o : *q;
+      const bool overlap = o != overlapping.end() && *o == j;
+      const bool paired = q != partners.end() && *q == j;
+      if (overlap) ++o;
+      if (paired) ++q;
+      if (overlap == paired) continue;
       BodyId a{std::min(id.index, j)}, b{std::max(id.index, j)};
-      auto it = pair_index.find(pair_key(a, b));
-      const bool overlap = box.overlaps(bodies[j].box);
-      if (overlap && it == pair_index.end()) {
+      if (overlap) {
         create_pair(a, b);
-      } else if (!overlap && it != pair_index.end()) {
-        remove_pair(it->second);
+      } else {
+        remove_pair(pair_index.at(pair_key(a, b)));
       }
     }
   }
@@ -300,10 +337,13 @@ struct Simulation::Impl {
   }
 
   // After a collision of a and b: both bodies' boxes and pairs, then every pair of either body
-  // re-bounded once (the pair (a, b) itself only once).
+  // re-bounded once (the pair (a, b) itself only once). A fixed body's box never changes, and
+  // every dynamic body overlapping it was paired with it at that body's own last refresh, so
+  // refreshing a fixed body would change nothing - but cost a scan of every dynamic body for a
+  // halfspace, whose box is infinite. It is skipped.
   void refresh_after_collision(BodyId a, BodyId b, double t) {
-    refresh_broad_phase(a, t);
-    refresh_broad_phase(b, t);
+    if (body(a).motion != MotionKind::kFixed) refresh_broad_phase(a, t);
+    if (body(b).motion != MotionKind::kFixed) refresh_broad_phase(b, t);
     rebound_pairs(a, t);
     rebound_pairs(b, t, a);
   }
@@ -823,11 +863,11 @@ Simulation::Simulation(World world, SimulationOptions options)
   }
   for (std::uint32_t i = 0; i < world_.bodies.size(); ++i) im.refresh_box(BodyId{i}, 0.0);
   // Bodies may start touching (the racked pool balls sit inside each other's envelopes) but
-  // never overlapping.
+  // never overlapping. Pairs in order (i, j), i < j, as the broad phase finds them.
   for (std::uint32_t i = 0; i < world_.bodies.size(); ++i) {
-    for (std::uint32_t j = i + 1; j < world_.bodies.size(); ++j) {
-      if (!world_.bodies[i].is_dynamic() && !world_.bodies[j].is_dynamic()) continue;
-      if (!im.bodies[i].box.overlaps(im.bodies[j].box)) continue;
+    im.find_overlaps(BodyId{i}, im.overlapping);
+    for (std::uint32_t j : im.overlapping) {
+      if (j < i) continue;
       PairCache cache;
       const Body& a = world_.bodies[i];
       const Body& b = world_.bodies[j];

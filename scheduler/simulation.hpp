@@ -45,6 +45,7 @@ struct SimulationStats {
   std::uint64_t integration_steps = 0;   // Runge-Kutta steps, all collisions
   std::uint64_t pairs_created = 0;       // pairs entering the broad phase
   std::uint64_t max_pairs = 0;           // most pairs tracked at once
+  std::uint64_t box_tests = 0;           // swept-box overlap tests made by the broad phase
 };
 
 enum class CollisionKind : std::uint8_t { kCollision, kMicrocollision };

@@ -1,0 +1,213 @@
+#include "scheduler/broad_phase.hpp"
+
+#include "core/check.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace palpable {
+
+namespace {
+
+// Cell indices are kept within +-2^60: a clamped query range still meets exactly the cells of
+// stored boxes, whose indices are below 2^51 in magnitude (see level_of).
+constexpr double kIndexLimit = 1152921504606846976.0;  // 2^60
+
+bool finite_box(const Aabb& box) {
+  return box.min_W.allFinite() && box.max_W.allFinite();
+}
+
+// The level of a finite box: the smallest L with 2^L >= its largest extent, raised so that its
+// coordinates stay below 2^51 cells (a tiny box far out goes to a coarser level).
+int level_of(const Aabb& box) {
+  const double extent = (box.max_W - box.min_W).maxCoeff();
+  const double far = std::max(box.min_W.cwiseAbs().maxCoeff(), box.max_W.cwiseAbs().maxCoeff());
+  int level = -1074;
+  if (extent > 0.0) {
+    int e;
+    const double m = std::frexp(extent, &e);  // extent = m 2^e, m in [0.5, 1)
+    level = m == 0.5 ? e - 1 : e;
+  }
+  if (far > 0.0) {
+    int e;
+    std::frexp(far, &e);  // far < 2^e
+    level = std::max(level, e - 51);
+  }
+  return level;
+}
+
+// The block (8 x 8 x 8 cells) of a cell index, rounding down.
+std::int64_t block_of(std::int64_t i) {
+  return i >= 0 ? i / 8 : -((-i + 7) / 8);
+}
+
+double cell_index(double x, int level) {
+  return std::clamp(std::floor(std::ldexp(x, -level)), -kIndexLimit, kIndexLimit);
+}
+
+}  // namespace
+
+std::size_t BroadPhase::CellKeyHash::operator()(const CellKey& c) const {
+  std::uint64_t h = static_cast<std::uint64_t>(c.i) * 0x9E3779B97F4A7C15ull;
+  h = h * 0xC2B2AE3D27D4EB4Full ^ static_cast<std::uint64_t>(c.j);
+  h = h * 0x165667B19E3779F9ull ^ static_cast<std::uint64_t>(c.k);
+  return static_cast<std::size_t>(h ^ (h >> 29));
+}
+
+void BroadPhase::set(std::uint32_t id, const Aabb& box) {
+  if (id >= items_.size()) {
+    items_.resize(id + 1);
+    visited_.resize(id + 1, 0);
+  }
+  if (items_[id].present) {
+    const Aabb& old = items_[id].box;
+    if (old.min_W == box.min_W && old.max_W == box.max_W) return;  // a resting body: no change
+    remove(id);
+  }
+  Item& item = items_[id];
+  item.box = box;
+  item.present = true;
+  ++size_;
+  if (!finite_box(box)) {
+    item.unbounded = true;
+    item.list_position = unbounded_.size();
+    unbounded_.push_back(id);
+    return;
+  }
+  item.unbounded = false;
+  item.level = level_of(box);
+  for (int a = 0; a < 3; ++a) {
+    item.lo[a] = static_cast<std::int64_t>(cell_index(box.min_W[a], item.level));
+    item.hi[a] = static_cast<std::int64_t>(cell_index(box.max_W[a], item.level));
+  }
+  Level& level = levels_[item.level];
+  item.list_position = level.items.size();
+  level.items.push_back(id);
+  insert_cells(id);
+}
+
+void BroadPhase::remove(std::uint32_t id) {
+  PALPABLE_CHECK(contains(id), "removing an item the broad phase does not hold");
+  Item& item = items_[id];
+  std::vector<std::uint32_t>* list = &unbounded_;
+  if (!item.unbounded) {
+    erase_cells(id);
+    list = &levels_.at(item.level).items;
+  }
+  // Swap-remove from its list, keeping the moved item's position current.
+  const std::uint32_t last = list->back();
+  (*list)[item.list_position] = last;
+  items_[last].list_position = item.list_position;
+  list->pop_back();
+  item.present = false;
+  --size_;
+}
+
+void BroadPhase::insert_cells(std::uint32_t id) {
+  const Item& item = items_[id];
+  Level& level = levels_[item.level];
+  for (std::int64_t i = item.lo[0]; i <= item.hi[0]; ++i) {
+    for (std::int64_t j = item.lo[1]; j <= item.hi[1]; ++j) {
+      for (std::int64_t k = item.lo[2]; k <= item.hi[2]; ++k) {
+        level.cells[CellKey{i, j, k}].push_back(CellEntry{item.box, id});
+        ++level.blocks[CellKey{block_of(i), block_of(j), block_of(k)}];
+      }
+    }
+  }
+}
+
+void BroadPhase::erase_cells(std::uint32_t id) {
+  const Item& item = items_[id];
+  Level& level = levels_.at(item.level);
+  for (std::int64_t i = item.lo[0]; i <= item.hi[0]; ++i) {
+    for (std::int64_t j = item.lo[1]; j <= item.hi[1]; ++j) {
+      for (std::int64_t k = item.lo[2]; k <= item.hi[2]; ++k) {
+        auto it = level.cells.find(CellKey{i, j, k});
+        auto& cell = it->second;
+        cell.erase(std::find_if(cell.begin(), cell.end(),
+                                [id](const CellEntry& e) { return e.id == id; }));
+        if (cell.empty()) level.cells.erase(it);
+        auto block = level.blocks.find(CellKey{block_of(i), block_of(j), block_of(k)});
+        if (--block->second == 0) level.blocks.erase(block);
+      }
+    }
+  }
+}
+
+void BroadPhase::visit_cells(const Level& level, const std::int64_t lo[3], const std::int64_t hi[3],
+                             const Aabb& box, std::uint32_t self, std::vector<std::uint32_t>& out) {
+  for (std::int64_t i = lo[0]; i <= hi[0]; ++i) {
+    for (std::int64_t j = lo[1]; j <= hi[1]; ++j) {
+      for (std::int64_t k = lo[2]; k <= hi[2]; ++k) {
+        auto it = level.cells.find(CellKey{i, j, k});
+        if (it == level.cells.end()) continue;
+        for (const CellEntry& e : it->second) test(e.id, e.box, box, self, out);
+      }
+    }
+  }
+}
+
+void BroadPhase::test(std::uint32_t id, const Aabb& stored, const Aabb& box, std::uint32_t self,
+                      std::vector<std::uint32_t>& out) {
+  if (visited_[id] == stamp_) return;
+  visited_[id] = stamp_;
+  if (id == self) return;
+  ++box_tests_;
+  if (stored.overlaps(box)) out.push_back(id);
+}
+
+void BroadPhase::query(const Aabb& box, std::uint32_t self, std::vector<std::uint32_t>& out) {
+  if (++stamp_ == 0) {  // the stamp wrapped: forget every mark
+    std::fill(visited_.begin(), visited_.end(), 0);
+    stamp_ = 1;
+  }
+  const std::size_t first = out.size();
+  const bool finite = finite_box(box);
+  for (const auto& [level, contents] : levels_) {
+    if (contents.items.empty()) continue;
+    double lo[3], hi[3];
+    double cells = 1.0;
+    for (int a = 0; a < 3 && finite; ++a) {
+      lo[a] = cell_index(box.min_W[a], level);
+      hi[a] = cell_index(box.max_W[a], level);
+      cells *= hi[a] - lo[a] + 1.0;
+    }
+    if (!finite || cells > static_cast<double>(contents.items.size())) {
+      for (std::uint32_t id : contents.items) test(id, items_[id].box, box, self, out);
+      continue;
+    }
+    std::int64_t lo_i[3], hi_i[3];
+    for (int a = 0; a < 3; ++a) {
+      lo_i[a] = static_cast<std::int64_t>(lo[a]);
+      hi_i[a] = static_cast<std::int64_t>(hi[a]);
+    }
+    if (cells <= 8.0) {
+      visit_cells(contents, lo_i, hi_i, box, self, out);
+      continue;
+    }
+    // Many cells: only those of the occupied blocks.
+    std::int64_t b_lo[3], b_hi[3];
+    for (int a = 0; a < 3; ++a) {
+      b_lo[a] = block_of(lo_i[a]);
+      b_hi[a] = block_of(hi_i[a]);
+    }
+    for (std::int64_t bi = b_lo[0]; bi <= b_hi[0]; ++bi) {
+      for (std::int64_t bj = b_lo[1]; bj <= b_hi[1]; ++bj) {
+        for (std::int64_t bk = b_lo[2]; bk <= b_hi[2]; ++bk) {
+          if (contents.blocks.find(CellKey{bi, bj, bk}) == contents.blocks.end()) continue;
+          const std::int64_t block[3] = {bi, bj, bk};
+          std::int64_t c_lo[3], c_hi[3];
+          for (int a = 0; a < 3; ++a) {
+            c_lo[a] = std::max(lo_i[a], 8 * block[a]);
+            c_hi[a] = std::min(hi_i[a], 8 * block[a] + 7);
+          }
+          visit_cells(contents, c_lo, c_hi, box, self, out);
+        }
+      }
+    }
+  }
+  for (std::uint32_t id : unbounded_) test(id, items_[id].box, box, self, out);
+  std::sort(out.begin() + static_cast<std::ptrdiff_t>(first), out.end());
+}
+
+}  // namespace palpable
