@@ -56,7 +56,11 @@ CollisionResult resolve_microcollision(const Mat3& K_c, const Vec3& u0_c,
     // Drift-free: the slip that averages to zero over the next flight of duration tau.
     const double u_z = std::max(-params.restitution * u0_c.z(), floored.min_rebound_speed);
     const double tau = context.g_n > 0.0 ? 2.0 * u_z / context.g_n : 0.0;
-    const Vec2 u_t = -0.5 * tau * context.a_t_c;
+    // In the surface's frame, turning at Omega about n, the displacement over the flight is the
+    // integral of (1 - [Omega n]x t) (u_t' + a_t t): zero, to second order in Omega tau, for
+    // u_t' = -a_t tau / 2 + (Omega n x a_t) tau^2 / 12.
+    const Vec2 spun(-context.a_t_c.y(), context.a_t_c.x());  // n x a_t in the contact frame
+    const Vec2 u_t = -0.5 * tau * context.a_t_c + context.surface_spin * tau * tau / 12.0 * spun;
     target = Vec3(u_t.x(), u_t.y(), u_z);
     kind = PhaseKind::kDriftFreeTarget;
   }

@@ -7,7 +7,9 @@
 //
 // Two rules (Settings::microcollision_rule):
 //  - drift-free (default): aim at u' = (-a_t tau / 2, max(-e u_z0, v_micro)), tau = 2 u_z'/g_n
-//    the flight to the next bounce, so that the slip averages to zero over that flight; apply
+//    the flight to the next bounce, so that the slip averages to zero over that flight (on a
+//    surface turning at Omega about n, the displacement on it: u_t' = -a_t tau / 2 +
+//    (Omega n x a_t) tau^2 / 12, since the slip integrates in the turning frame); apply
 //    p = K^-1 (u' - u0) if it lies in the friction cone, else the impulse on the cone boundary
 //    with friction toward the tangential target that reaches the normal target through the full
 //    K. (DESIGN.md also allows the ordinary integration with the floor as the fallback; measured
@@ -29,6 +31,10 @@ struct MicrocollisionContext {
   Vec2 a_t_c = Vec2::Zero();
   // Relative normal acceleration toward contact, g_n = -(a1 - a2) . n >= 0 [m/s^2].
   double g_n = 0.0;
+  // Spin about n of the surface the slip is measured against [rad/s] (a kinematic platter: its
+  // angular velocity . n; 0 for a fixed one). Zero mean slip over a flight is not zero
+  // displacement on a turning surface: the drift-free target adds (Omega n x a_t) tau^2 / 12.
+  double surface_spin = 0.0;
 };
 
 // v_micro [m/s]: Settings::microcollision_speed_mps if set (>= 0), else sqrt(2 g_n envelope);

@@ -566,6 +566,15 @@ struct Simulation::Impl {
       const Vec3 a_c = R_WC.transpose() * c.a_rel_W;
       context.a_t_c = Vec2(a_c.x(), a_c.y());
       context.g_n = c.g_n;
+      if (c.centre_of_pressure &&
+          (b1.motion == MotionKind::kKinematic || b2.motion == MotionKind::kKinematic)) {
+        // A face resting on a turning surface sticks to it: what must vanish over the flight is
+        // its displacement on the surface. (A rolling ball's orbit follows its mean slip, which
+        // the first-order target already zeroes; the term made the platter's orbit rate error
+        // 3 times larger.)
+        const Body& kinematic = b1.motion == MotionKind::kKinematic ? b1 : b2;
+        context.surface_spin = kinematic.kinematic.angular_velocity_W.dot(c.n_W);
+      }
       result = resolve_microcollision(K_c, u0_c, params, settings().microcollision_rule, context,
                                       c.v_micro);
       // On a kinematic surface the slip rate Omega x (v - V) depends on the velocity the

@@ -130,6 +130,48 @@ CreepRun ramp_creep(MicrocollisionRule rule, double theta, double mu, double env
   return run;
 }
 
+TEST_CASE("on a turning surface the drift-free target zeroes the displacement, not the mean slip",
+          "[impulse][micro]") {
+  // A block resting on a platter turning at Omega about n: over the flight tau the slip
+  // u(t) = u' + a_t t, seen in the platter's frame, integrates to the displacement
+  // D = integral of R(t)^T u(t) dt, R(t) the rotation by Omega t about n. The target
+  // u_t' = -a_t tau / 2 + (Omega n x a_t) tau^2 / 12 makes D vanish to second order in
+  // Omega tau; the first-order target leaves |Omega x a_t| tau^3 / 12.
+  const Mat3 K = Vec3(2.0, 2.0, 1.0).asDiagonal();  // a sphere-like contact, mass 1
+  const double g = 9.81, v_micro = 0.044, omega = 2.0 * M_PI;
+  const Vec3 u0(0.0, 0.0, -v_micro);
+  MicrocollisionContext context;
+  context.g_n = g;
+  context.a_t_c = Vec2(0.0, -omega * 0.3 * omega);  // -Omega x (v - V) for a body 0.3 m out
+  const CollisionParameters params = params_for(10.0, 0.0, RestitutionLaw::kStronge);
+  const double tau = 2.0 * v_micro / g;
+  auto displacement = [&](const Vec3& u_final) {
+    // Simpson's rule on the rotated slip over [0, tau].
+    Vec2 D = Vec2::Zero();
+    const int n = 2000;
+    for (int k = 0; k <= n; ++k) {
+      const double t = tau * k / n;
+      const Vec2 slip = u_final.head<2>() + context.a_t_c * t;
+      const double c = std::cos(-omega * t), s = std::sin(-omega * t);
+      const Vec2 rotated(c * slip.x() - s * slip.y(), s * slip.x() + c * slip.y());
+      const double w = (k == 0 || k == n) ? 1.0 : (k % 2 ? 4.0 : 2.0);
+      D += w * rotated;
+    }
+    return Vec2(D * tau / (3.0 * n));
+  };
+  const CollisionResult flat =
+      resolve_microcollision(K, u0, params, MicrocollisionRule::kDriftFree, context, v_micro);
+  context.surface_spin = omega;
+  const CollisionResult turning =
+      resolve_microcollision(K, u0, params, MicrocollisionRule::kDriftFree, context, v_micro);
+  REQUIRE(succeeded(flat.status));
+  REQUIRE(succeeded(turning.status));
+  const double first_order = omega * context.a_t_c.norm() * std::pow(tau, 3) / 12.0;
+  CAPTURE(first_order, displacement(flat.u_final_c).norm(), displacement(turning.u_final_c).norm());
+  CHECK(displacement(flat.u_final_c).norm() == Approx(first_order).epsilon(0.01));
+  CHECK(displacement(turning.u_final_c).norm() < 0.01 * first_order);
+}
+
 TEST_CASE("a block resting on a ramp: the reversal rule creeps, the drift-free rule does not",
           "[impulse][micro][creep]") {
   // The decelerating-block scene's ramp: tan 30 deg = 0.577 in the band mu/2 < tan <= mu = 0.7.

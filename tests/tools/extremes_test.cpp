@@ -903,11 +903,11 @@ TEST_CASE("a box resting on a kinematic rotating platter for 1000 s stays on it"
 // contact location is not zero displacement against the platter's material point: the two
 // differ by Omega^2 |Omega x r| tau^3 / 12 per flight, 4.2e-5 m/s here, as measured after (1).
 TEST_CASE("a box resting on a kinematic rotating platter does not creep",
-          "[extremes][long][platter][!mayfail]") {
-  // Known to fail (measured at envelope 1e-4 over 100 s): 0.021 m of creep before the
-  // microcollision aimed with the velocity the box flies with, 0.0042 m after. What remains is
-  // that zero mean slip at the moving contact point is not zero displacement against the
-  // turning surface: Omega^2 |Omega x r| tau^3 / 12 per flight predicts 4.2e-5 m/s.
+          "[extremes][long][platter]") {
+  // Measured at envelope 1e-4 over 100 s: 0.021 m of creep with the first microcollision
+  // target, 0.0042 m once it aimed with the velocity the box flies with, 3.3e-5 m once the
+  // target zeroes the displacement on the turning surface, not the mean slip
+  // (impulse/microcollision.hpp: + (Omega n x a_t) tau^2 / 12).
   const Run spec = platter_run(100.0);
   const Outcome out = run(spec);
   const PlatterFigures f = platter_figures(spec, out);
