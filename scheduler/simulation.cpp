@@ -141,6 +141,7 @@ struct Simulation::Impl {
   std::vector<std::uint32_t> free_pairs;
   std::unordered_map<std::uint64_t, std::uint32_t> pair_index;
   EventQueue::EventId sample_event = EventQueue::kNoEvent;
+  std::vector<BodyId> riders;  // bodies carried along by the last collision (see resolve)
   std::uint64_t next_sample = 0;
   // The swept boxes, dynamic bodies apart from fixed and kinematic ones: a non-dynamic body
   // looks only among the dynamic ones, so two non-dynamic bodies are never even compared.
@@ -489,7 +490,10 @@ struct Simulation::Impl {
     // u_n = 0 with gravity pressing the bodies together counts as approaching: a body left at
     // rest in contact by an e = 0 collision must collide again (DESIGN.md §4). Without it, an
     // approach within rounding of the bodies' speeds (what an e = 0 collision leaves) is rest.
-    if (c.g_n > 0.0) return c.u_n <= 1e-9 * c.v_micro;
+    // Two dynamic bodies share gravity, so nothing presses them together at rest: a body
+    // resting on another rides along when the lower one bounces on its support (see riders).
+    const bool both_dynamic = c.body1.inv_mass > 0.0 && c.body2.inv_mass > 0.0;
+    if (c.g_n > 0.0 && !both_dynamic) return c.u_n <= 1e-9 * c.v_micro;
     const double scale =
         contact_point_velocity_W(c.body1).norm() + contact_point_velocity_W(c.body2).norm();
     return c.u_n < -1e-12 * scale;
@@ -530,6 +534,43 @@ struct Simulation::Impl {
     cb2.w_W = t2.w_W;
   }
 
+  // How steep a contact normal must be to count as support, cos 60 degrees from the vertical.
+  static constexpr double kSupportCosine = 0.5;
+
+  // The dynamic bodies riding on body `id` at time t: resting on it (within two envelopes, a
+  // microcollision bounces a body up to 1.5; the normal within 60 degrees of the vertical;
+  // at rest on it along the normal or settling onto it slower than the microcollision speed),
+  // and those riding on them, up to 8 levels. Appended to `riders` (no repeats).
+  void collect_riders(BodyId id, double t, int depth, std::vector<BodyId>& riders) {
+    if (depth > 8 || sim.world_.gravity_W.squaredNorm() == 0.0) return;
+    const Vec3 up = -sim.world_.gravity_W.normalized();
+    const std::vector<std::uint32_t> pair_list = bodies[id.index].pairs;
+    for (std::uint32_t index : pair_list) {
+      PairRuntime& q = pairs[index];
+      const BodyId other = q.a == id ? q.b : q.a;
+      if (!body(other).is_dynamic() ||
+          std::find(riders.begin(), riders.end(), other) != riders.end()) {
+        continue;
+      }
+      const BodyState s1 = extrapolate(q.a, t), s2 = extrapolate(q.b, t);
+      ++sim.stats_.bound_queries;
+      const DistanceResult dr = query(q, s1, s2);
+      if (dr.status != ContactStatus::kSeparated && dr.status != ContactStatus::kTouching) continue;
+      if (dr.distance > 2.0 * settings().envelope_m) continue;
+      const Vec3 n = q.a == other ? dr.n_W : Vec3(-dr.n_W);  // from `id` up to `other`
+      if (n.dot(up) <= kSupportCosine) continue;
+      const BodyState& s_other = q.a == other ? s1 : s2;
+      const BodyState& s_id = q.a == other ? s2 : s1;
+      const double v_micro =
+          microcollision_speed(settings(), std::abs(sim.world_.gravity_W.dot(n)));
+      // Resting on it or settling onto it, not flying off it.
+      const double u_rel = n.dot(s_other.v_W - s_id.v_W);
+      if (u_rel > 1e-9 * v_micro || u_rel < -v_micro * (1.0 + 1e-6)) continue;
+      riders.push_back(other);
+      collect_riders(other, t, depth + 1, riders);
+    }
+  }
+
   // Resolves the collision and applies it to both bodies; returns the record.
   // `depth` counts re-resolutions at a moved contact point (at most one per rule).
   CollisionRecord resolve(const PairRuntime& p, Contact& c, double t, int depth = 0) {
@@ -556,10 +597,30 @@ struct Simulation::Impl {
         cd.inv_inertia_W = V * (V.transpose() * I_W * V).inverse() * V.transpose();
       }
     }
-    const Mat3 K_c = R_WC.transpose() * collision_matrix_W(cb1, cb2) * R_WC;
     const Vec3 u0_c =
         R_WC.transpose() * (contact_point_velocity_W(cb1) - contact_point_velocity_W(cb2));
     const bool micro = is_microcollision(u0_c.z(), c.v_micro, settings());
+    // A body bouncing on its support carries what rests on it (shock propagation, as in
+    // Guendelman, Bridson & Fedkiw 2003, for the microcollision train): the microcollision acts
+    // on the stack's whole mass and every rider gets the same change of velocity. Otherwise a
+    // light body under a heavy one must pass the heavy one's weight on in its own collisions, a
+    // storm of m_heavy / m_light of them (tests/tools/extremes_test.cpp).
+    riders.clear();
+    double stack_mass = 0.0;
+    if (micro && b1.is_dynamic() != b2.is_dynamic() && depth == 0) {
+      const BodyId carrier = b1.is_dynamic() ? p.a : p.b;
+      const Vec3 n_up = b1.is_dynamic() ? c.n_W : Vec3(-c.n_W);  // from the support up
+      if (n_up.dot(-sim.world_.gravity_W.normalized()) > kSupportCosine) {
+        collect_riders(carrier, t, 0, riders);
+        for (BodyId r : riders) commit(r, t);
+        if (!riders.empty()) {
+          stack_mass = body(carrier).mass.mass;
+          for (BodyId r : riders) stack_mass += body(r).mass.mass;
+          (b1.is_dynamic() ? cb1 : cb2).inv_mass = 1.0 / stack_mass;
+        }
+      }
+    }
+    const Mat3 K_c = R_WC.transpose() * collision_matrix_W(cb1, cb2) * R_WC;
     CollisionResult result;
     if (micro) {
       MicrocollisionContext context;
@@ -661,7 +722,8 @@ struct Simulation::Impl {
                                   rotational_energy(b.mass, b.state)
                             : 0.0;
     };
-    const double kinetic_before = kinetic(b1) + kinetic(b2);
+    double kinetic_before = kinetic(b1) + kinetic(b2);
+    for (BodyId r : riders) kinetic_before += kinetic(body(r));
     apply_impulse(p_W, cb1, cb2);
     if (c.centre_of_pressure) {
       // A face resting on a face does not rock: the pressure over the patch takes out the small
@@ -684,6 +746,13 @@ struct Simulation::Impl {
     };
     store(b1, cb1);
     store(b2, cb2);
+    // The riders move on with the carrier along the normal (a plastic merge with the stack,
+    // which the impulse on the stack's mass assumed); they keep their sliding and spin.
+    for (BodyId r : riders) {
+      const Vec3 v_carrier = (b1.is_dynamic() ? b1 : b2).state.v_W;
+      Vec3& v = body(r).state.v_W;
+      v += c.n_W * c.n_W.dot(v_carrier - v);
+    }
     PALPABLE_CHECK(b1.state.v_W.allFinite() && b1.state.w_W.allFinite() &&
                        b2.state.v_W.allFinite() && b2.state.w_W.allFinite(),
                    "non-finite velocity after a collision");
@@ -697,8 +766,11 @@ struct Simulation::Impl {
     record.n_W = c.n_W;
     record.impulse_W = p_W;
     record.approach_speed = -u0_c.z();
-    record.energy_change = kinetic(b1) + kinetic(b2) - kinetic_before;
+    double kinetic_after = kinetic(b1) + kinetic(b2);
+    for (BodyId r : riders) kinetic_after += kinetic(body(r));
+    record.energy_change = kinetic_after - kinetic_before;
     record.centre_of_pressure = c.centre_of_pressure;
+    record.carried = riders;
     if (micro) {
       ++sim.stats_.microcollisions;
     } else {
@@ -829,6 +901,10 @@ struct Simulation::Impl {
         if (observer) observer->on_collision(record);
         const BodyId a = p.a, b = p.b;  // `p` may move when pairs are created below
         refresh_after_collision(a, b, t);
+        const std::vector<BodyId> carried = riders;
+        for (BodyId r : carried) refresh_broad_phase(r, t);
+        for (BodyId r : carried) rebound_pairs(r, t);
+        if (!carried.empty()) sim.stats_.riders_carried += carried.size();
         return;
       }
       schedule_pair(index, next_check_time(p, s1, s2, dr, t, &c));

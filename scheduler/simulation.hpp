@@ -41,6 +41,7 @@ struct SimulationStats {
   std::uint64_t distance_failures = 0;   // closest-feature walks that hit their step limit
   std::uint64_t impulse_failures = 0;    // collisions whose integration failed
   std::uint64_t centre_of_pressure = 0;  // collisions resolved by the centre-of-pressure rule
+  std::uint64_t riders_carried = 0;      // bodies carried along by a microcollision below them
   std::uint64_t feature_steps = 0;       // V-Clip feature steps, all queries
   std::uint64_t integration_steps = 0;   // Runge-Kutta steps, all collisions
   std::uint64_t pairs_created = 0;       // pairs entering the broad phase
@@ -62,6 +63,9 @@ struct CollisionRecord {
   double approach_speed = 0.0;    // -u_n before the collision [m/s]
   double energy_change = 0.0;     // kinetic energy of the two bodies after minus before [J]
   bool centre_of_pressure = false;
+  // Bodies resting on the dynamic body of a microcollision with its support, carried along with
+  // it (their velocity along n set to its); energy_change includes them.
+  std::vector<BodyId> carried;
 };
 
 // Receives what a run produces. Default implementations ignore everything.
