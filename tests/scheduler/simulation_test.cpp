@@ -344,3 +344,43 @@ TEST_CASE("a tall block tipping forward while rocking back lands on its back edg
   CHECK(rec.collisions.front().p_W.x() == Approx(-0.02).margin(1e-6));
   CHECK(rec.collisions.front().impulse_W.z() < 0.0);  // on the ground; the block is pushed up
 }
+
+TEST_CASE("a stack of three boxes, 1, 10 and 100 kg from the bottom, rests without a storm",
+          "[scheduler][stack]") {
+  // The bottom box bounces on the ground in microcollisions and carries the two above it
+  // (riders): the stack behaves as one resting body, about g / (2 v_micro) = 111 bounces a
+  // second, instead of the light box passing the heavy ones' weight on in its own collisions.
+  World world;
+  world.default_material = Material{0.5, 0.3};
+  world.add(ground());
+  const double masses[] = {1.0, 10.0, 100.0};
+  for (int i = 0; i < 3; ++i) {
+    Body box;
+    box.name = "box" + std::to_string(i);
+    box.shape = std::make_shared<const Shape>(ConvexPolyhedron::box(Vec3(0.1, 0.1, 0.05)));
+    box.mass = mass_properties_from_mass(*box.shape, masses[i]);
+    box.state.x_W = Vec3(0.01 * i, 0.0, 0.05 + 0.1 * i + 5e-5 * (1 + 2 * i));
+    world.add(box);
+  }
+  const double t_end = 5.0;
+  const double v_micro = std::sqrt(2.0 * 9.81 * world.settings.envelope_m);
+  Simulation sim(world, SimulationOptions{});
+  Recorder rec;
+  sim.run_until(t_end, &rec);
+  CHECK(sim.stats().retry_limit_hits == 0);
+  CHECK(sim.stats().penetrations == 0);
+  CHECK(sim.stats().collisions == 0);
+  // One bounce per flight of the stack, x 2 for the pair checks and bounds.
+  CHECK(sim.stats().events <=
+        static_cast<std::uint64_t>(2.0 * t_end * 9.81 / (2.0 * v_micro)) + 50);
+  for (std::uint32_t i = 1; i <= 3; ++i) {
+    CAPTURE(i);
+    const BodyState s = sim.state_at(BodyId{i}, t_end);
+    CHECK(std::abs(s.x_W.x() - 0.01 * (i - 1)) < 1e-9);  // no drift
+    CHECK(s.x_W.z() >= 0.05 + 0.1 * (i - 1));            // never sunk into the box below
+    CHECK(s.x_W.z() <= 0.05 + 0.1 * (i - 1) + 2.0 * i * world.settings.envelope_m);
+  }
+  std::size_t carried = 0;
+  for (const CollisionRecord& r : rec.collisions) carried = std::max(carried, r.carried.size());
+  CHECK(carried == 2);
+}
