@@ -2,6 +2,7 @@
 // forms: a coin spinning flat on a table slows at mu m g r_eff / I_n; a solid sphere rolling with
 // rolling resistance d decelerates at 5 d g / (7 r).
 #include "scheduler/simulation.hpp"
+#include "scheduler_test_support.hpp"
 
 #include "core/mass_properties.hpp"
 #include "core/shape.hpp"
@@ -16,12 +17,7 @@ using namespace palpable;
 namespace {
 
 Body table() {
-  Body b;
-  b.name = "table";
-  b.motion = MotionKind::kFixed;
-  b.shape = std::make_shared<const Shape>(make_halfspace(Vec3::UnitZ(), 0.0));
-  b.mass = infinite_mass_properties();
-  return b;
+  return palpable::test::fixed_ground("table");
 }
 
 struct Samples : SimulationObserver {

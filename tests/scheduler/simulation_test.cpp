@@ -2,6 +2,7 @@
 // bouncing ball's heights and Zeno guard, a box dropped flat, determinism, and the reference
 // queue giving the identical event sequence.
 #include "scheduler/simulation.hpp"
+#include "scheduler_test_support.hpp"
 
 #include "core/ballistic.hpp"
 #include "core/check.hpp"
@@ -29,12 +30,7 @@ Body sphere_body(const std::string& name, double radius, double mass, const Vec3
 }
 
 Body ground() {
-  Body b;
-  b.name = "ground";
-  b.motion = MotionKind::kFixed;
-  b.shape = std::make_shared<const Shape>(make_halfspace(Vec3::UnitZ(), 0.0));
-  b.mass = infinite_mass_properties();
-  return b;
+  return palpable::test::fixed_ground("ground");
 }
 
 // Records everything a run produces.

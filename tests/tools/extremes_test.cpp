@@ -363,6 +363,20 @@ void check_invariants(const Run& spec, const Outcome& out, double rounding, bool
   if (energy) CHECK(out.worst_mismatch <= 1e-12 * (std::abs(out.e0) + 1.0));
 }
 
+// Runs the scene and checks every invariant, with rounding allowed at 1e-12 of the energy.
+Outcome run_checked(const Run& spec) {
+  Outcome out = run(spec);
+  check_invariants(spec, out, 1e-12 * (std::abs(out.e0) + 1.0));
+  return out;
+}
+
+// An event cap of `base` plus `per_bounce` events per resting bounce over the run: a body at
+// rest bounces g / (2 v_micro) times a second, v_micro = sqrt(2 g envelope).
+std::uint64_t resting_cap(const Run& spec, double base, double per_bounce) {
+  const double v_micro = std::sqrt(2.0 * kG * spec.world.settings.envelope_m);
+  return static_cast<std::uint64_t>(base + per_bounce * spec.t_end * kG / (2.0 * v_micro));
+}
+
 // Relative velocity of the two spheres' centres after a 1-D impact, by the closed form.
 struct Impact1D {
   double v1, v2;
@@ -467,10 +481,9 @@ TEST_CASE("friction 0, 1e-9, 10, 1e3: a sliding box decelerates at mu g or stick
     // A resting contact bounces g / (2 v_micro) = 111 times a second at the default envelope;
     // each bounce is a pair check plus its re-bound: x 4 for slack.
     const double v_micro = std::sqrt(2.0 * kG * envelope);
-    spec.event_cap = static_cast<std::uint64_t>(1000 + 4 * spec.t_end * kG / (2 * v_micro));
+    spec.event_cap = resting_cap(spec, 1000, 4);
     spec.keep_samples = true;
-    Outcome out = run(spec);
-    check_invariants(spec, out, 1e-12 * (std::abs(out.e0) + 1.0));
+    const Outcome out = run_checked(spec);
     const BodyState& s = out.final_states[1];
     const double stop = 1.0 / (mu * kG);  // v0 / (mu g)
     if (stop > spec.t_end) {
@@ -502,11 +515,9 @@ TEST_CASE("friction 0, 1e-9, 10, 1e3: a spinning ball landing obliquely creates 
       spec.world.add(sphere_body("ball", radius, 0.2, Vec3(0, 0, 0.3), v0, w0));
       spec.t_end = 2.0;
       spec.interval = 0.005;
-      const double v_micro = std::sqrt(2.0 * kG * spec.world.settings.envelope_m);
       // e = 1 bounces about 1 / 0.5 s; e = 0 rests after the first: the resting rate bounds both.
-      spec.event_cap = static_cast<std::uint64_t>(2000 + 4 * spec.t_end * kG / (2 * v_micro));
-      Outcome out = run(spec);
-      check_invariants(spec, out, 1e-12 * (std::abs(out.e0) + 1.0));
+      spec.event_cap = resting_cap(spec, 2000, 4);
+      const Outcome out = run_checked(spec);
       const BodyState& s = out.final_states[1];
       if (mu == 0.0) {
         // Frictionless: the horizontal velocity and the spin never change.
@@ -541,11 +552,9 @@ TEST_CASE("e = 0 and e = 1: a tumbling box dropped on its corner creates no ener
                             about(Vec3(1, 2, 0.5), 0.7), Vec3(0.3, 0, 0), Vec3(2, -1, 3)));
     spec.t_end = 3.0;
     spec.interval = 0.005;
-    const double v_micro = std::sqrt(2.0 * kG * spec.world.settings.envelope_m);
     // Resting contact on up to four corners: 4 x the resting rate, x 4 for re-bounds and checks.
-    spec.event_cap = static_cast<std::uint64_t>(5000 + 16 * spec.t_end * kG / (2 * v_micro));
-    Outcome out = run(spec);
-    check_invariants(spec, out, 1e-12 * (std::abs(out.e0) + 1.0));
+    spec.event_cap = resting_cap(spec, 5000, 16);
+    const Outcome out = run_checked(spec);
   }
 }
 
@@ -571,9 +580,8 @@ TEST_CASE("envelopes 1e-9 to 1e-2 m: a ball and a box come to rest without Zeno 
       const double v_micro = std::sqrt(2.0 * kG * envelope);
       // Resting: g / (2 v_micro) bounces a second (the event count grows as 1/sqrt(envelope)),
       // up to 4 contact points, x 4 for re-bounds and checks.
-      spec.event_cap = static_cast<std::uint64_t>(5000 + 16 * spec.t_end * kG / (2 * v_micro));
-      Outcome out = run(spec);
-      check_invariants(spec, out, 1e-12 * (std::abs(out.e0) + 1.0));
+      spec.event_cap = resting_cap(spec, 5000, 16);
+      const Outcome out = run_checked(spec);
       // At rest on the ground at the end: within an envelope plus a floor bounce's height.
       const BodyState& s = out.final_states[1];
       const double lowest = signed_gap(*spec.world.bodies[1].shape, s, *spec.world.bodies[0].shape,
@@ -657,11 +665,9 @@ TEST_CASE("spin 1e4 rad/s: a spinning ball and a spinning box landing", "[extrem
     }
     spec.t_end = 1.0;
     spec.interval = 0.001;
-    const double v_micro = std::sqrt(2.0 * kG * spec.world.settings.envelope_m);
     // A tumbling box's corners strike many times; 20x the resting rate plus 2e5 bounds.
-    spec.event_cap = static_cast<std::uint64_t>(200000 + 20 * spec.t_end * kG / (2 * v_micro));
-    Outcome out = run(spec);
-    check_invariants(spec, out, 1e-12 * (std::abs(out.e0) + 1.0));
+    spec.event_cap = resting_cap(spec, 200000, 20);
+    const Outcome out = run_checked(spec);
   }
 }
 
@@ -679,10 +685,8 @@ TEST_CASE("a coin 1/100 as thick as wide, dropped flat and on edge", "[extremes]
                                 Vec3(0, 0, 0.1), q));
     spec.t_end = 2.0;
     spec.interval = 0.002;
-    const double v_micro = std::sqrt(2.0 * kG * spec.world.settings.envelope_m);
-    spec.event_cap = static_cast<std::uint64_t>(20000 + 32 * spec.t_end * kG / (2 * v_micro));
-    Outcome out = run(spec);
-    check_invariants(spec, out, 1e-12 * (std::abs(out.e0) + 1.0));
+    spec.event_cap = resting_cap(spec, 20000, 32);
+    const Outcome out = run_checked(spec);
     // It ends lying flat.
     const BodyState& s = out.final_states[1];
     CHECK(s.x_W.z() < half_height + 3 * spec.world.settings.envelope_m);
@@ -697,10 +701,8 @@ TEST_CASE("a 1 x 0.01 x 0.01 sliver falling edge-first", "[extremes][thin]") {
                           about(Vec3(0.3, 1, 0), 0.5), Vec3(0.2, 0, 0), Vec3(0, 0, 1)));
   spec.t_end = 3.0;
   spec.interval = 0.002;
-  const double v_micro = std::sqrt(2.0 * kG * spec.world.settings.envelope_m);
-  spec.event_cap = static_cast<std::uint64_t>(20000 + 16 * spec.t_end * kG / (2 * v_micro));
-  Outcome out = run(spec);
-  check_invariants(spec, out, 1e-12 * (std::abs(out.e0) + 1.0));
+  spec.event_cap = resting_cap(spec, 20000, 16);
+  const Outcome out = run_checked(spec);
   CHECK(out.final_states[1].x_W.z() < 0.005 + 3 * spec.world.settings.envelope_m);
 }
 
@@ -755,9 +757,8 @@ TEST_CASE("a ball with e = 0.5 comes to rest (Zeno) with a finite event count",
   // Past the accumulation point sqrt(2 h0 / g)(1 + e)/(1 - e) = 1.36 s the ball bounces at
   // v_micro, g / (2 v_micro) = 111 times a second; each bounce is about two events, plus
   // horizons and samples: 4 x the resting rate + 3000.
-  spec.event_cap = static_cast<std::uint64_t>(3000 + 4 * spec.t_end * kG / (2 * v_micro));
-  Outcome out = run(spec);
-  check_invariants(spec, out, 1e-12 * (std::abs(out.e0) + 1.0));
+  spec.event_cap = resting_cap(spec, 3000, 4);
+  const Outcome out = run_checked(spec);
   const double t_rest = std::sqrt(2.0 * h0 / kG) * (1 + e) / (1 - e);
   const auto bounces = out.stats.collisions + out.stats.microcollisions;
   WARN("Zeno ball: " << bounces << " bounces (" << out.stats.microcollisions
@@ -792,10 +793,8 @@ TEST_CASE("face on face: a box landing flat on a box", "[extremes][parallel]") {
     spec.world.add(box_body("upper", Vec3(0.05, 0.05, 0.05), 0.5, Vec3(0.02, 0.01, 0.25)));
     spec.t_end = 2.0;
     spec.interval = 0.002;
-    const double v_micro = std::sqrt(2.0 * kG * spec.world.settings.envelope_m);
-    spec.event_cap = static_cast<std::uint64_t>(10000 + 32 * spec.t_end * kG / (2 * v_micro));
-    Outcome out = run(spec);
-    check_invariants(spec, out, 1e-12 * (std::abs(out.e0) + 1.0));
+    spec.event_cap = resting_cap(spec, 10000, 32);
+    const Outcome out = run_checked(spec);
     // The upper box stays on the lower one, flat. Each contact level is a microcollision train:
     // the gap comes back to about envelope / 2 and rises again, so a resting box rides a few
     // envelopes above its support. Measured at envelope 1e-4 over the last second of the stack:
@@ -824,10 +823,8 @@ TEST_CASE("edge on edge: a box edge landing on a box edge, crossed and parallel"
         box_body("upper", half, 1.0, Vec3(0.001, 0.002, 2 * a * std::sqrt(2.0) + 0.1), q));
     spec.t_end = 2.0;
     spec.interval = 0.002;
-    const double v_micro = std::sqrt(2.0 * kG * spec.world.settings.envelope_m);
-    spec.event_cap = static_cast<std::uint64_t>(10000 + 32 * spec.t_end * kG / (2 * v_micro));
-    Outcome out = run(spec);
-    check_invariants(spec, out, 1e-12 * (std::abs(out.e0) + 1.0));
+    spec.event_cap = resting_cap(spec, 10000, 32);
+    const Outcome out = run_checked(spec);
   }
 }
 
