@@ -131,6 +131,10 @@ struct Simulation::Impl {
     // velocity is taken where the contact point, moved along n, meets its own surface.
     double gap = 0.0;
     Vec3 plane2_W = Vec3::Zero();
+    // Bodies resting on the dynamic body of a microcollision with its support, carried along
+    // (collected once, at the first resolution), and the stack's mass with them.
+    std::vector<BodyId> riders;
+    double stack_mass = 0.0;
     std::vector<Vec3> patch;
   };
 
@@ -141,7 +145,7 @@ struct Simulation::Impl {
   std::vector<std::uint32_t> free_pairs;
   std::unordered_map<std::uint64_t, std::uint32_t> pair_index;
   EventQueue::EventId sample_event = EventQueue::kNoEvent;
-  std::vector<BodyId> riders;  // bodies carried along by the last collision (see resolve)
+  std::vector<std::uint32_t> rebound_scratch;  // pairs re-bounded after a collision (reused)
   std::uint64_t next_sample = 0;
   // The swept boxes, dynamic bodies apart from fixed and kinematic ones: a non-dynamic body
   // looks only among the dynamic ones, so two non-dynamic bodies are never even compared.
@@ -323,12 +327,9 @@ struct Simulation::Impl {
     }
   }
 
-  // Re-bounds every pair of `id` except the one with `skip` (rebound never changes the lists).
-  void rebound_pairs(BodyId id, double t, BodyId skip = BodyId{}) {
-    for (std::uint32_t index : bodies[id.index].pairs) {
-      const PairRuntime& p = pairs[index];
-      if (p.a != skip && p.b != skip) rebound(index, t);
-    }
+  // Re-bounds every pair of `id` (rebound never changes the lists).
+  void rebound_pairs(BodyId id, double t) {
+    for (std::uint32_t index : bodies[id.index].pairs) rebound(index, t);
   }
 
   // A body's horizon ran out: new box, pairs, bounds.
@@ -337,19 +338,34 @@ struct Simulation::Impl {
     rebound_pairs(id, t);
   }
 
-  // After a collision of a and b: both bodies' boxes and pairs, then every pair of either body
-  // re-bounded once (the pair (a, b) itself only once). A fixed body's box never changes, and
-  // every dynamic body overlapping it was paired with it at that body's own last refresh, so
-  // refreshing a fixed body would change nothing - but cost a scan of every dynamic body for a
-  // halfspace, whose box is infinite. It is skipped.
-  void refresh_after_collision(BodyId a, BodyId b, double t) {
-    if (body(a).motion != MotionKind::kFixed) refresh_broad_phase(a, t);
-    if (body(b).motion != MotionKind::kFixed) refresh_broad_phase(b, t);
-    // A fixed or kinematic body's motion is not changed by the collision, so the bounds of its
-    // other pairs stay valid: only the dynamic bodies' pairs are re-bounded (a table or wall
-    // with a pair for each of n bodies cost O(n^(2/3)) re-bounds per collision in a gas).
-    if (body(a).is_dynamic()) rebound_pairs(a, t);
-    if (body(b).is_dynamic()) rebound_pairs(b, t, body(a).is_dynamic() ? a : BodyId{});
+  // After a collision: the boxes and pairs of every body it moved (the pair's and the riders
+  // it carried), then every pair of those bodies re-bounded once. A fixed body's box never
+  // changes, and every dynamic body overlapping it was paired with it at that body's own last
+  // refresh, so refreshing a fixed body would change nothing - but cost a scan of every dynamic
+  // body for a halfspace, whose box is infinite: it is skipped. A fixed or kinematic body's
+  // motion is not changed by a collision either, so the bounds of its other pairs stay valid:
+  // only the dynamic bodies' pairs are re-bounded (a table or wall with a pair for each of n
+  // bodies cost O(n^(2/3)) re-bounds per collision in a gas).
+  void refresh_after_collision(const CollisionRecord& r, double t) {
+    auto each_moved = [&](auto&& f) {
+      f(r.a);
+      f(r.b);
+      for (BodyId id : r.carried) f(id);
+    };
+    each_moved([&](BodyId id) {
+      if (body(id).motion != MotionKind::kFixed) refresh_broad_phase(id, t);
+    });
+    rebound_scratch.clear();
+    each_moved([&](BodyId id) {
+      if (!body(id).is_dynamic()) return;
+      for (std::uint32_t index : bodies[id.index].pairs) {
+        if (std::find(rebound_scratch.begin(), rebound_scratch.end(), index) ==
+            rebound_scratch.end()) {
+          rebound_scratch.push_back(index);
+        }
+      }
+    });
+    for (std::uint32_t index : rebound_scratch) rebound(index, t);
   }
 
   // ---------------------------------------------------------------- contacts
@@ -544,8 +560,8 @@ struct Simulation::Impl {
   void collect_riders(BodyId id, double t, int depth, std::vector<BodyId>& riders) {
     if (depth > 8 || sim.world_.gravity_W.squaredNorm() == 0.0) return;
     const Vec3 up = -sim.world_.gravity_W.normalized();
-    const std::vector<std::uint32_t> pair_list = bodies[id.index].pairs;
-    for (std::uint32_t index : pair_list) {
+    // query() only warms a pair's cache: the pair lists do not change here.
+    for (std::uint32_t index : bodies[id.index].pairs) {
       PairRuntime& q = pairs[index];
       const BodyId other = q.a == id ? q.b : q.a;
       if (!body(other).is_dynamic() ||
@@ -605,21 +621,20 @@ struct Simulation::Impl {
     // on the stack's whole mass and every rider gets the same change of velocity. Otherwise a
     // light body under a heavy one must pass the heavy one's weight on in its own collisions, a
     // storm of m_heavy / m_light of them (tests/tools/extremes_test.cpp).
-    riders.clear();
-    double stack_mass = 0.0;
-    if (micro && b1.is_dynamic() != b2.is_dynamic() && depth == 0) {
+    // Collected at the first resolution only: a re-resolution at a moved point keeps them.
+    if (depth == 0 && micro && b1.is_dynamic() != b2.is_dynamic()) {
       const BodyId carrier = b1.is_dynamic() ? p.a : p.b;
       const Vec3 n_up = b1.is_dynamic() ? c.n_W : Vec3(-c.n_W);  // from the support up
       if (n_up.dot(-sim.world_.gravity_W.normalized()) > kSupportCosine) {
-        collect_riders(carrier, t, 0, riders);
-        for (BodyId r : riders) commit(r, t);
-        if (!riders.empty()) {
-          stack_mass = body(carrier).mass.mass;
-          for (BodyId r : riders) stack_mass += body(r).mass.mass;
-          (b1.is_dynamic() ? cb1 : cb2).inv_mass = 1.0 / stack_mass;
+        collect_riders(carrier, t, 0, c.riders);
+        c.stack_mass = body(carrier).mass.mass;
+        for (BodyId r : c.riders) {
+          commit(r, t);
+          c.stack_mass += body(r).mass.mass;
         }
       }
     }
+    if (!c.riders.empty()) (b1.is_dynamic() ? cb1 : cb2).inv_mass = 1.0 / c.stack_mass;
     const Mat3 K_c = R_WC.transpose() * collision_matrix_W(cb1, cb2) * R_WC;
     CollisionResult result;
     if (micro) {
@@ -723,7 +738,7 @@ struct Simulation::Impl {
                             : 0.0;
     };
     double kinetic_before = kinetic(b1) + kinetic(b2);
-    for (BodyId r : riders) kinetic_before += kinetic(body(r));
+    for (BodyId r : c.riders) kinetic_before += kinetic(body(r));
     apply_impulse(p_W, cb1, cb2);
     if (c.centre_of_pressure) {
       // A face resting on a face does not rock: the pressure over the patch takes out the small
@@ -748,7 +763,7 @@ struct Simulation::Impl {
     store(b2, cb2);
     // The riders move on with the carrier along the normal (a plastic merge with the stack,
     // which the impulse on the stack's mass assumed); they keep their sliding and spin.
-    for (BodyId r : riders) {
+    for (BodyId r : c.riders) {
       const Vec3 v_carrier = (b1.is_dynamic() ? b1 : b2).state.v_W;
       Vec3& v = body(r).state.v_W;
       v += c.n_W * c.n_W.dot(v_carrier - v);
@@ -767,10 +782,10 @@ struct Simulation::Impl {
     record.impulse_W = p_W;
     record.approach_speed = -u0_c.z();
     double kinetic_after = kinetic(b1) + kinetic(b2);
-    for (BodyId r : riders) kinetic_after += kinetic(body(r));
+    for (BodyId r : c.riders) kinetic_after += kinetic(body(r));
     record.energy_change = kinetic_after - kinetic_before;
     record.centre_of_pressure = c.centre_of_pressure;
-    record.carried = riders;
+    record.carried = c.riders;
     if (micro) {
       ++sim.stats_.microcollisions;
     } else {
@@ -899,12 +914,8 @@ struct Simulation::Impl {
         }
         CollisionRecord record = resolve(p, c, t);
         if (observer) observer->on_collision(record);
-        const BodyId a = p.a, b = p.b;  // `p` may move when pairs are created below
-        refresh_after_collision(a, b, t);
-        const std::vector<BodyId> carried = riders;
-        for (BodyId r : carried) refresh_broad_phase(r, t);
-        for (BodyId r : carried) rebound_pairs(r, t);
-        if (!carried.empty()) sim.stats_.riders_carried += carried.size();
+        sim.stats_.riders_carried += record.carried.size();
+        refresh_after_collision(record, t);  // `p` may move when pairs are created there
         return;
       }
       schedule_pair(index, next_check_time(p, s1, s2, dr, t, &c));

@@ -182,10 +182,12 @@ nlohmann::json summary_json(const RunResult& r) {
                      {"distance_failures", s.distance_failures},
                      {"impulse_failures", s.impulse_failures},
                      {"centre_of_pressure", s.centre_of_pressure},
+                     {"riders_carried", s.riders_carried},
                      {"feature_steps", s.feature_steps},
                      {"integration_steps", s.integration_steps},
                      {"pairs_created", s.pairs_created},
-                     {"max_pairs", s.max_pairs}};
+                     {"max_pairs", s.max_pairs},
+                     {"box_tests", s.box_tests}};
   const Settings& st = r.scene.world.settings;
   j["settings"] = {{"envelope", st.envelope_m},
                    {"microcollision_speed", st.microcollision_speed_mps},
