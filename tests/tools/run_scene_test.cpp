@@ -202,4 +202,11 @@ TEST_CASE("a trace too short for its reference is run and says the comparison is
   CHECK(r.reference["unavailable"].get<std::string>().find("fit needs more than 2 samples") !=
         std::string::npos);
   CHECK(r.stats.events > 0);
+
+  // A bad reference object is not a short trace: it stays an error naming the scene's path, and
+  // no file is written.
+  options.overrides = {"/reference/type=\"inclined\""};
+  options.trace_path = "run_scene_test_bad_reference.csv";
+  CHECK_THROWS_WITH(run_scene(options), Catch::Contains("/reference"));
+  CHECK_FALSE(exists(options.trace_path));
 }

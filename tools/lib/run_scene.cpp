@@ -131,6 +131,8 @@ RunResult run_scene(const RunOptions& options) {
           compare_with_reference(scene.reference, result.trace, scene.source + ":/reference");
     } catch (const InputError& e) {
       // The run is sound; only its trace cannot be compared (too short, too coarse): say so.
+      // Anything else (a bad reference object in the scene) stays an error.
+      if (e.where() != "trace") throw;
       result.reference = {{"unavailable", e.what()}};
     }
   }
