@@ -381,6 +381,10 @@ double rotational_energy(const MassProperties& mass, const BodyState& state) {
   return 0.5 * w_B.dot(mass.principal_moments.cwiseProduct(w_B));
 }
 
+double kinetic_energy(const Body& body, const BodyState& state) {
+  return 0.5 * body.mass.mass * state.v_W.squaredNorm() + rotational_energy(body.mass, state);
+}
+
 Vec3 angular_momentum_W(const MassProperties& mass, const BodyState& state) {
   const Quat q_WB = principal_orientation_W(mass, state.q_WM);
   return q_WB * mass.principal_moments.cwiseProduct(q_WB.conjugate() * state.w_W);

@@ -87,6 +87,8 @@ Vec3 point_velocity_W(const BodyState& state, const Vec3& p_W);
 // Rotational kinetic energy T = w.I w / 2 [J] and world angular momentum L_W [kg m^2/s] of a
 // dynamic body in `state`.
 double rotational_energy(const MassProperties& mass, const BodyState& state);
+// Kinetic energy m v^2 / 2 + w.I w / 2 [J] of a dynamic body in `state`.
+double kinetic_energy(const Body& body, const BodyState& state);
 Vec3 angular_momentum_W(const MassProperties& mass, const BodyState& state);
 
 // Period of omega_B(t) of a torque-free asymmetric body [s]: 4 K(k) / lambda (Landau & Lifshitz

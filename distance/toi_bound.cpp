@@ -26,6 +26,12 @@ double solve_gap_closing(double a, double b, double delta) {
   return kInfinity;
 }
 
+double solve_return_to_gap(double a, double b, double delta) {
+  if (!(a > 0.0)) return kInfinity;
+  const double disc = b * b + 2.0 * a * delta;
+  return disc >= 0.0 ? (-b + std::sqrt(disc)) / a : -2.0 * b / a;
+}
+
 ToiBound toi_bound(const ToiMotion& motion1, const ToiMotion& motion2,
                    const DistanceResult& closest, double d_target, const Settings& settings) {
   ToiBound bound;
@@ -47,8 +53,7 @@ ToiBound toi_bound(const ToiMotion& motion1, const ToiMotion& motion2,
     // returns to d, t = -2b/a; never, without a closing acceleration. Aiming at d itself, a
     // body bounced from a gap of 0 (placed exactly touching) came back to 0 and, by rounding,
     // into overlap: 1.47 million overlapping queries for a block placed on a ramp.
-    const double disc = b * b + 2.0 * a * delta;
-    bound.dt = a > 0.0 ? (disc >= 0.0 ? (-b + std::sqrt(disc)) / a : -2.0 * b / a) : kInfinity;
+    bound.dt = solve_return_to_gap(a, b, delta);
     return bound;
   }
   bound.dt = solve_gap_closing(a, b, delta);
@@ -105,12 +110,9 @@ ToiBound exact_toi_sphere_plane(const Vec3& c_W, const Vec3& v_W, const Vec3& g_
   bound.closing_accel = -g_W.dot(n_W);
   const double a = bound.closing_accel;
   const double b = bound.closing_speed;
-  if (delta <= 0.0 && b < 0.0 && a > 0.0) {
-    // Inside the target gap and receding (the flight after a microcollision): the time the
-    // parabola comes back down to the target gap, or, if it never rises above it, back to the
-    // present gap (t = -2b/a).
-    const double disc = b * b + 2.0 * a * delta;
-    bound.dt = disc >= 0.0 ? (-b + std::sqrt(disc)) / a : -2.0 * b / a;
+  if (delta <= 0.0 && b < 0.0) {
+    // Inside the target gap and receding (the flight after a microcollision).
+    bound.dt = solve_return_to_gap(a, b, delta);
     return bound;
   }
   bound.dt = solve_gap_closing(a, b, delta);

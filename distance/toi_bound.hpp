@@ -60,6 +60,11 @@ struct ToiBound {
 
 // Smallest t >= 0 with 1/2 a t^2 + b t = delta (delta > 0), by the branches above; +inf if none.
 double solve_gap_closing(double a, double b, double delta);
+// Inside the target gap (delta <= 0) and receding (b < 0), the gap stays above the parabola
+// d - b t - a t^2 / 2, which is at least its present value until it comes back down to it: the
+// time it falls back to the target if it rises above it, else -2b/a back to the present gap;
+// +inf without a closing acceleration (a <= 0).
+double solve_return_to_gap(double a, double b, double delta);
 
 // The conservative bound from the closest-feature result (status separated or touching; any other
 // status gives dt = 0). d_target [m] < envelope. A pair already inside the target gap and

@@ -131,6 +131,10 @@ struct Simulation::Impl {
     // velocity is taken where the contact point, moved along n, meets its own surface.
     double gap = 0.0;
     Vec3 plane2_W = Vec3::Zero();
+    // The dynamic body is a sphere: its slip is taken at its centre's motion, as under the
+    // centre-of-pressure rule (DESIGN.md §4).
+    bool sphere = false;
+    bool slip_at_centre() const { return sphere || centre_of_pressure; }
     // Bodies resting on the dynamic body of a microcollision with its support, carried along
     // (collected once, at the first resolution), and the stack's mass with them.
     std::vector<BodyId> riders;
@@ -342,7 +346,8 @@ struct Simulation::Impl {
   // it carried), then every pair of those bodies re-bounded once. A fixed body's box never
   // changes, and every dynamic body overlapping it was paired with it at that body's own last
   // refresh, so refreshing a fixed body would change nothing - but cost a scan of every dynamic
-  // body for a halfspace, whose box is infinite: it is skipped. A fixed or kinematic body's
+  // body for a halfspace, whose box is infinite: it is skipped. So for a kinematic body, whose
+  // box follows only time (its horizon event keeps it current). A fixed or kinematic body's
   // motion is not changed by a collision either, so the bounds of its other pairs stay valid:
   // only the dynamic bodies' pairs are re-bounded (a table or wall with a pair for each of n
   // bodies cost O(n^(2/3)) re-bounds per collision in a gas).
@@ -353,7 +358,7 @@ struct Simulation::Impl {
       for (BodyId id : r.carried) f(id);
     };
     each_moved([&](BodyId id) {
-      if (body(id).motion != MotionKind::kFixed) refresh_broad_phase(id, t);
+      if (body(id).is_dynamic()) refresh_broad_phase(id, t);
     });
     rebound_scratch.clear();
     each_moved([&](BodyId id) {
@@ -449,15 +454,14 @@ struct Simulation::Impl {
     const Body* dynamic_body = b1.is_dynamic() ? &b1 : (b2.is_dynamic() ? &b2 : nullptr);
     const ContactBody& cd = b1.is_dynamic() ? c.body1 : c.body2;
     Vec3 location_velocity = Vec3::Zero();
-    const bool sphere_like = dynamic_body && std::holds_alternative<Sphere>(*dynamic_body->shape);
+    c.sphere = dynamic_body && std::holds_alternative<Sphere>(*dynamic_body->shape);
     if (dynamic_body) {
-      location_velocity =
-          (sphere_like || c.centre_of_pressure) ? cd.v_W : contact_point_velocity_W(cd);
+      location_velocity = c.slip_at_centre() ? cd.v_W : contact_point_velocity_W(cd);
     }
     auto accel = [&](const Body& b, const ContactBody& cb) -> Vec3 {
       if (b.is_dynamic()) {
         Vec3 a = sim.world_.gravity_W;
-        if (!sphere_like && !c.centre_of_pressure) a += cb.w_W.cross(cb.w_W.cross(cb.r_W));
+        if (!c.slip_at_centre()) a += cb.w_W.cross(cb.w_W.cross(cb.r_W));
         return a;
       }
       if (b.motion == MotionKind::kKinematic) {
@@ -528,9 +532,12 @@ struct Simulation::Impl {
     ContactBody t1 = c.body1, t2 = c.body2;
     t1.w_W = cb1.w_W;
     t2.w_W = cb2.w_W;
-    // About n: Coulomb friction over a patch, or the material's spinning resistance at a point.
+    // About n: Coulomb friction over a patch, or the material's spinning resistance at a point
+    // (the patch's mean distance, the costly part, only if there is spin to resist).
+    const bool spins = c.n_W.dot(t1.w_W - t2.w_W) != 0.0;
     const double torsion_arm =
-        c.centre_of_pressure
+        !spins ? 0.0
+        : c.centre_of_pressure
             ? material.friction * mean_distance_over_patch(c.patch, c.n_W, pressure_W)
             : material.spinning_resistance;
     if (torsion_arm > 0.0) {
@@ -540,9 +547,10 @@ struct Simulation::Impl {
     if (material.rolling_resistance > 0.0) {
       const Vec3 w_rel = t1.w_W - t2.w_W;
       const Vec3 rolling = w_rel - c.n_W * c.n_W.dot(w_rel);
-      if (rolling.norm() > 0.0) {
-        const AngularImpulse resistance = resisting_angular_impulse(
-            rolling.normalized(), t1, t2, material.rolling_resistance * P_n);
+      const double rate = rolling.norm();
+      if (rate > 0.0) {
+        const AngularImpulse resistance =
+            resisting_angular_impulse(rolling / rate, t1, t2, material.rolling_resistance * P_n);
         apply_angular_impulse(resistance.L_W, t1, t2);
       }
     }
@@ -621,8 +629,12 @@ struct Simulation::Impl {
     // on the stack's whole mass and every rider gets the same change of velocity. Otherwise a
     // light body under a heavy one must pass the heavy one's weight on in its own collisions, a
     // storm of m_heavy / m_light of them (tests/tools/extremes_test.cpp).
-    // Collected at the first resolution only: a re-resolution at a moved point keeps them.
-    if (depth == 0 && micro && b1.is_dynamic() != b2.is_dynamic()) {
+    // Only over a face resting on its support (the centre-of-pressure rule: the carrier does not
+    // turn, so the stack's mass is all the impulse meets); collected at the first resolution,
+    // dropped if a re-resolution finds the carrier tipping.
+    const bool resting_face = c.centre_of_pressure && !c.segment;
+    if (!resting_face) c.riders.clear();
+    if (depth == 0 && micro && resting_face) {
       const BodyId carrier = b1.is_dynamic() ? p.a : p.b;
       const Vec3 n_up = b1.is_dynamic() ? c.n_W : Vec3(-c.n_W);  // from the support up
       if (n_up.dot(-sim.world_.gravity_W.normalized()) > kSupportCosine) {
@@ -642,30 +654,27 @@ struct Simulation::Impl {
       const Vec3 a_c = R_WC.transpose() * c.a_rel_W;
       context.a_t_c = Vec2(a_c.x(), a_c.y());
       context.g_n = c.g_n;
-      if (c.centre_of_pressure &&
-          (b1.motion == MotionKind::kKinematic || b2.motion == MotionKind::kKinematic)) {
+      // The kinematic surface of the pair, if any (its partner is then the dynamic body).
+      const Body* surface = b1.motion == MotionKind::kKinematic
+                                ? &b1
+                                : (b2.motion == MotionKind::kKinematic ? &b2 : nullptr);
+      const Vec3 surface_w_W = surface ? surface->kinematic.angular_velocity_W : Vec3::Zero();
+      if (c.centre_of_pressure) {
         // A face resting on a turning surface sticks to it: what must vanish over the flight is
         // its displacement on the surface. (A rolling ball's orbit follows its mean slip, which
         // the first-order target already zeroes; the term made the platter's orbit rate error
         // 3 times larger.)
-        const Body& kinematic = b1.motion == MotionKind::kKinematic ? b1 : b2;
-        context.surface_spin = kinematic.kinematic.angular_velocity_W.dot(c.n_W);
+        context.surface_spin = surface_w_W.dot(c.n_W);
       }
       result = resolve_microcollision(K_c, u0_c, params, settings().microcollision_rule, context,
                                       c.v_micro);
-      // On a kinematic surface the slip rate Omega x (v - V) depends on the velocity the
-      // dynamic body flies with, which is the one after this impulse: aim once more with it.
-      const Body* surface = b1.motion == MotionKind::kKinematic
-                                ? &b1
-                                : (b2.motion == MotionKind::kKinematic ? &b2 : nullptr);
-      const bool location_at_centre =
-          c.centre_of_pressure ||
-          std::holds_alternative<Sphere>(*(b1.is_dynamic() ? b1 : b2).shape);
-      if (surface && (b1.is_dynamic() != b2.is_dynamic()) && location_at_centre &&
-          succeeded(result.status)) {
-        const double inv_mass = b1.is_dynamic() ? b1.mass.inv_mass : -b2.mass.inv_mass;
+      // On a turning surface the slip rate Omega x (v - V) depends on the velocity the dynamic
+      // body flies with, which is the one after this impulse: aim once more with it.
+      if (surface_w_W.squaredNorm() > 0.0 && c.slip_at_centre() && succeeded(result.status)) {
+        const ContactBody& cd = b1.is_dynamic() ? cb1 : cb2;
+        const double inv_mass = b1.is_dynamic() ? cd.inv_mass : -cd.inv_mass;
         const Vec3 dv_W = R_WC * result.p_c * inv_mass;  // body 1 gets +p, body 2 -p
-        const Vec3 da_W = surface->kinematic.angular_velocity_W.cross(dv_W);
+        const Vec3 da_W = surface_w_W.cross(dv_W);
         const Vec3 a2_c = R_WC.transpose() * (c.a_rel_W + (surface == &b1 ? da_W : -da_W));
         context.a_t_c = Vec2(a2_c.x(), a2_c.y());
         result = resolve_microcollision(K_c, u0_c, params, settings().microcollision_rule, context,
@@ -717,13 +726,12 @@ struct Simulation::Impl {
         // first takes the collision (else a zero impulse there leaves the pair approaching at
         // the same instant, again and again).
         c.centre_of_pressure = false;
-        c.point_W = exit_point(c.patch, c.n_W, c.point_W, pressure);
-        const Vec3 u_exit =
-            point_velocity_W(b1.state, c.point_W) - point_velocity_W(b2.state, c.point_W);
+        place(c, exit_point(c.patch, c.n_W, c.point_W, pressure), b1.state.x_W, b2.state.x_W);
+        const Vec3 u_exit = contact_point_velocity_W(c.body1) - contact_point_velocity_W(c.body2);
         if (!(u_exit.dot(c.n_W) < 0.0)) {
-          c.point_W = fastest_approaching_corner(c.patch, c.n_W, b1.state, b2.state, x_D);
+          place(c, fastest_approaching_corner(c.patch, c.n_W, b1.state, b2.state, x_D),
+                b1.state.x_W, b2.state.x_W);
         }
-        place(c, c.point_W, b1.state.x_W, b2.state.x_W);
         return resolve(p, c, t, depth + 1);
       }
     }
@@ -732,11 +740,7 @@ struct Simulation::Impl {
     // (1/2)(u0 + u').p is that of the impulse at the point it was resolved with, which the
     // centre-of-pressure rule's modified inertia and its removal of rocking make differ from what
     // the bodies show (by up to 0.015 J on a 1 kg box at envelope 1e-2).
-    auto kinetic = [](const Body& b) {
-      return b.is_dynamic() ? 0.5 * b.mass.mass * b.state.v_W.squaredNorm() +
-                                  rotational_energy(b.mass, b.state)
-                            : 0.0;
-    };
+    auto kinetic = [](const Body& b) { return b.is_dynamic() ? kinetic_energy(b, b.state) : 0.0; };
     double kinetic_before = kinetic(b1) + kinetic(b2);
     for (BodyId r : c.riders) kinetic_before += kinetic(body(r));
     apply_impulse(p_W, cb1, cb2);
@@ -785,7 +789,7 @@ struct Simulation::Impl {
     for (BodyId r : c.riders) kinetic_after += kinetic(body(r));
     record.energy_change = kinetic_after - kinetic_before;
     record.centre_of_pressure = c.centre_of_pressure;
-    record.carried = c.riders;
+    record.carried = std::move(c.riders);
     if (micro) {
       ++sim.stats_.microcollisions;
     } else {

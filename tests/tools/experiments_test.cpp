@@ -30,8 +30,7 @@ double mechanical_energy(const RunResult& r, std::size_t k) {
     const auto& body = world.bodies[i];
     if (!body.is_dynamic()) continue;
     const BodyState& s = r.trace.samples[k][i];
-    e += 0.5 * body.mass.mass * s.v_W.squaredNorm() + palpable::rotational_energy(body.mass, s) -
-         body.mass.mass * world.gravity_W.dot(s.x_W);
+    e += palpable::kinetic_energy(body, s) - body.mass.mass * world.gravity_W.dot(s.x_W);
   }
   return e;
 }
@@ -130,8 +129,7 @@ TEST_CASE("pool break: the rack scatters, no ball leaves the table, no energy cr
   // comes before any cushion contact.
   double kinetic = 0.0, lightest = 1e300;
   for (std::size_t i = 2; i < world.bodies.size(); ++i) {
-    kinetic += 0.5 * world.bodies[i].mass.mass * r.trace.samples[0][i].v_W.squaredNorm() +
-               palpable::rotational_energy(world.bodies[i].mass, r.trace.samples[0][i]);
+    kinetic += palpable::kinetic_energy(world.bodies[i], r.trace.samples[0][i]);
     lightest = std::min(lightest, world.bodies[i].mass.mass);
   }
   const double interval = r.trace.times[1] - r.trace.times[0];

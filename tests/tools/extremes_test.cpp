@@ -149,8 +149,7 @@ double mechanical_energy(const World& world, const std::vector<BodyState>& state
     const Body& body = world.bodies[i];
     if (!body.is_dynamic()) continue;
     const BodyState& s = states[i];
-    e += 0.5 * body.mass.mass * s.v_W.squaredNorm() + rotational_energy(body.mass, s) -
-         body.mass.mass * world.gravity_W.dot(s.x_W);
+    e += kinetic_energy(body, s) - body.mass.mass * world.gravity_W.dot(s.x_W);
   }
   return e;
 }
@@ -244,8 +243,7 @@ class Checker : public SimulationObserver {
       if (!body.is_dynamic()) continue;
       const BodyState before = advance(body, last_[id.index], r.t, world_.gravity_W, settings);
       const BodyState after = sim->state_at(id, r.t);
-      actual += 0.5 * body.mass.mass * (after.v_W.squaredNorm() - before.v_W.squaredNorm()) +
-                rotational_energy(body.mass, after) - rotational_energy(body.mass, before);
+      actual += kinetic_energy(body, after) - kinetic_energy(body, before);
       last_[id.index] = after;
     }
     if (r.energy_change - allowance > out_.worst_record_excess ||
