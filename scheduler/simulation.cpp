@@ -291,9 +291,10 @@ struct Simulation::Impl {
     const Aabb& box = bodies[id.index].box;
     dynamic_boxes.query(box, id.index, out);
     if (body(id).is_dynamic()) {
-      const auto middle = static_cast<std::ptrdiff_t>(out.size());
+      const std::size_t dynamic_count = out.size();
       static_boxes.query(box, id.index, out);
-      std::inplace_merge(out.begin(), out.begin() + middle, out.end());
+      // Two ascending runs: sorted in place (inplace_merge allocates a buffer on every call).
+      if (dynamic_count > 0 && dynamic_count < out.size()) std::sort(out.begin(), out.end());
     }
     sim.stats_.box_tests = dynamic_boxes.box_tests() + static_boxes.box_tests();
   }
@@ -826,12 +827,18 @@ struct Simulation::Impl {
     }
   }
 
+  // The least step a pair's next check may take at time t [s]: settings.toi_min_progress_s, and
+  // never less than 1e-12 t, so that t + step > t however long the run.
+  double progress_floor(double t) const {
+    return std::max(settings().toi_min_progress_s, 1e-12 * std::max(1.0, t));
+  }
+
   // The next event time of a pair from its closest features at time t.
   // `known`: the contact check_pair already made of this very query and found not approaching
   // (saves making it again); null to make it here.
   double next_check_time(const PairRuntime& p, const BodyState& s1, const BodyState& s2,
                          const DistanceResult& dr, double t, const Contact* known = nullptr) {
-    const double floor = std::max(settings().toi_min_progress_s, 1e-12 * std::max(1.0, t));
+    const double floor = progress_floor(t);
     if (dr.status == ContactStatus::kFailed) {
       ++sim.stats_.distance_failures;
       return t + floor;
@@ -909,7 +916,7 @@ struct Simulation::Impl {
           if (p.collisions_at_t > settings().retry_limit) {
             // A rounding loop: report it and move on by the progress floor.
             ++sim.stats_.retry_limit_hits;
-            schedule_pair(index, t + std::max(settings().toi_min_progress_s, 1e-12));
+            schedule_pair(index, t + progress_floor(t));
             return;
           }
         } else {
