@@ -64,7 +64,9 @@ struct CollisionRecord {
   double energy_change = 0.0;     // kinetic energy of the two bodies after minus before [J]
   bool centre_of_pressure = false;
   // Bodies resting on the dynamic body of a microcollision with its support, carried along with
-  // it (their velocity along n set to its); energy_change includes them.
+  // it (their velocity along n set to its); energy_change includes them. impulse_W is the
+  // support's impulse on the whole stack; a rider settling onto the carrier also takes the
+  // plastic impulse that matches its normal velocity to the carrier's, not recorded apart.
   std::vector<BodyId> carried;
 };
 

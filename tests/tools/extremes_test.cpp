@@ -633,15 +633,6 @@ TEST_CASE("speeds 1e-9 to 1e4 m/s: spheres and a box hitting a wall, no penetrat
         CHECK(out.stats.collisions >= 1);
         CHECK(out.final_states[1].v_W.x() < 0.0);  // bounced back off the wall
       }
-      if (kind == 0) {
-        // Equal masses, e = 1, head-on: the velocities exchange.
-        CHECK(out.stats.collisions == 1);
-        CHECK(out.final_states[0].v_W.norm() <= 1e-12 * speed);
-        CHECK(out.final_states[1].v_W.x() == Approx(speed).epsilon(1e-12));
-      } else {
-        CHECK(out.stats.collisions >= 1);
-        CHECK(out.final_states[1].v_W.x() < 0.0);  // bounced back off the wall
-      }
     }
   }
 }
