@@ -43,7 +43,8 @@ TEST_CASE("finite_range rejects NaN, infinities and values outside, naming the o
     CHECK(message.find("finite") != std::string::npos);
   }
   CHECK(parse(positive, "1e-3").empty());
-  CHECK(!parse(positive, "0").empty());
+  CHECK(parse(positive, "0") == "--x: expected a finite number > 0, got 0");
+  CHECK(parse(non_negative, "-1") == "--x: expected a finite number >= 0, got -1");
   CHECK(!parse(finite_range(0.0, 0.5), "0.6").empty());
   CHECK(parse(finite_range(0.0, 0.5), "0.5").empty());
 }
