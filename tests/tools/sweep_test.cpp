@@ -261,7 +261,7 @@ TEST_CASE("malformed sweep tables are rejected naming the file and line", "[tool
   }
 }
 
-TEST_CASE("CRLF shard files merge like LF ones; a line break in a cell becomes a space",
+TEST_CASE("CRLF shard files merge like LF ones, and a line break in a cell becomes a space",
           "[tools][sweep]") {
   const std::string rows[3] = {"0,3,f,1e-3,0.1,0.2,10,1,9,0,0.5", "1,3,f,1e-4,0.01,0.3,20,1,19,0,",
                                "2,3,f,\"a,b\",0.001,0.4,30,1,29,2,0.25"};
