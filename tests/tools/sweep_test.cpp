@@ -309,6 +309,19 @@ TEST_CASE("a combination that fails when run is named with its values", "[tools]
   }
 }
 
+TEST_CASE("a run's numerical trouble shows in its row", "[tools][sweep]") {
+  // As in run_scene_test: the chain of balls hits a retry limit of 1 (pairs colliding again at
+  // one instant), and runs clean with the default limit.
+  SweepOptions options;
+  options.scene_path = scene("chain_of_balls.json");
+  options.parameters = {palpable::tools::parse_vary("/settings/retry_limit=1,100")};
+  const SweepTable table = palpable::tools::run_sweep(options);
+  REQUIRE(table.rows.size() == 2);
+  const std::size_t trouble = column(table, "trouble");
+  CHECK(table.rows[0][trouble] == "1");
+  CHECK(table.rows[1][trouble] == "0");
+}
+
 TEST_CASE("the primary error of each reference type", "[tools][sweep]") {
   using palpable::tools::primary_error;
   CHECK(primary_error(json{{"reference", "incline"},
