@@ -8,6 +8,7 @@
 #include "distance/crosscheck/mpr.hpp"
 #include "tools/commands.hpp"
 #include "tools/lib/exit_codes.hpp"
+#include "tools/lib/median.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -29,11 +30,6 @@ struct BenchShape {
 BenchShape bench_shape(std::string name, Shape shape) {
   return {std::move(name),
           std::make_shared<const ShapeGeometry>(std::make_shared<const Shape>(std::move(shape)))};
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
 }
 
 // Body 1 tumbles slowly past body 2 (fixed at the origin) at a clearance of a few centimetres:

@@ -5,6 +5,7 @@
 // A benchmark, not a test: it prints JSON lines (or, with --markdown, the README's table).
 #include "tools/commands.hpp"
 #include "tools/lib/exit_codes.hpp"
+#include "tools/lib/median.hpp"
 #include "tools/lib/run_scene.hpp"
 
 #include <nlohmann/json.hpp>
@@ -113,8 +114,7 @@ palpable::tools::CommandRegistration reg{
               return palpable::tools::kExitFailure;
             }
           }
-          std::nth_element(walls.begin(), walls.begin() + walls.size() / 2, walls.end());
-          const double wall = walls[walls.size() / 2];
+          const double wall = palpable::tools::median(walls);
           nlohmann::json j = {{"scene", name},
                               {"virtual_s", virtual_s},
                               {"wall_s", wall},

@@ -6,14 +6,17 @@
 #include "core/check.hpp"
 #include "scheduler/simulation.hpp"
 #include "tools/commands.hpp"
+#include "tools/lib/cli_checks.hpp"
 #include "tools/lib/exit_codes.hpp"
 #include "tools/lib/gas.hpp"
+#include "tools/lib/median.hpp"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <ctime>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -70,6 +73,7 @@ CommandRegistration registration{
           "event loop over --repeats runs of at least --events events (3 repeats from 10,000\n"
           "spheres), events/s, us per event, us per event / log2 n, and the work per event.\n"
           "Last line: the growth of us/event against that of log n.");
+      const double kLargest = std::numeric_limits<double>::max();
       auto counts =
           std::make_shared<std::vector<int>>(std::vector<int>{100, 300, 1000, 3000, 10000});
       auto events = std::make_shared<std::uint64_t>(100000);
@@ -79,16 +83,21 @@ CommandRegistration registration{
       auto warmup = std::make_shared<double>(1.0);
       app.add_option("--counts", *counts, "sphere counts (default 100,300,1000,3000,10000)")
           ->delimiter(',');
-      app.add_option("--events", *events, "events per run, at least (default 100000)");
-      app.add_option("--repeats", *repeats, "runs per count, >= 5 (3 from 10,000) (default 5)");
-      app.add_option("--volume-fraction", *fraction, "sphere volume / box volume (default 0.1)");
+      app.add_option("--events", *events, "events per run, at least (default 100000)")
+          ->check(CLI::Range(std::uint64_t{1}, std::numeric_limits<std::uint64_t>::max()));
+      app.add_option("--repeats", *repeats, "runs per count, >= 5 (3 from 10,000) (default 5)")
+          ->check(CLI::Range(5, std::numeric_limits<int>::max()));
+      // The open interval (0, pi / 6) make_sphere_gas accepts: the smallest positive double to
+      // just below pi / 6 (a cubic packing of touching spheres).
+      app.add_option("--volume-fraction", *fraction, "sphere volume / box volume (default 0.1)")
+          ->check(finite_range(std::numeric_limits<double>::min(),
+                               std::nextafter(std::acos(-1.0) / 6.0, 0.0)));
       app.add_option("--horizon", *horizon,
-                     "broad-phase horizon [s] (default: Settings::broad_phase_horizon_s)");
-      app.add_option("--warmup", *warmup, "untimed virtual time before timing [s] (default 1)");
+                     "broad-phase horizon [s] (default: Settings::broad_phase_horizon_s)")
+          ->check(finite_range(std::numeric_limits<double>::min(), kLargest));
+      app.add_option("--warmup", *warmup, "untimed virtual time before timing [s] (default 1)")
+          ->check(finite_range(0.0, kLargest));
       return std::function<int()>([counts, events, repeats, fraction, horizon, warmup] {
-        if (!(*warmup >= 0.0)) throw InputError("--warmup", "expected a time >= 0");
-        if (*repeats < 5) throw InputError("--repeats", "expected at least 5 repeats");
-        if (*events < 1) throw InputError("--events", "expected a positive count");
         if (counts->empty()) throw InputError("--counts", "expected at least one count");
         double first_us = 0.0, last_us = 0.0, first_cpu_us = 0.0, last_cpu_us = 0.0;
         int first_n = 0, last_n = 0;
@@ -108,10 +117,8 @@ CommandRegistration registration{
             walls.push_back(run.wall_s);
             cpus.push_back(run.cpu_s);
           }
-          std::sort(walls.begin(), walls.end());
-          std::sort(cpus.begin(), cpus.end());
-          const double wall = walls[walls.size() / 2];
-          const double cpu = cpus[cpus.size() / 2];
+          const double wall = median(walls);
+          const double cpu = median(cpus);
           const double ev = static_cast<double>(run.events);
           const double us = 1e6 * wall / ev;
           const double cpu_us = 1e6 * cpu / ev;

@@ -6,13 +6,16 @@
 #include "scenarios/scene.hpp"
 #include "scheduler/simulation.hpp"
 #include "tools/commands.hpp"
+#include "tools/lib/cli_checks.hpp"
 #include "tools/lib/exit_codes.hpp"
 #include "tools/lib/gas.hpp"
+#include "tools/lib/median.hpp"
 
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <ctime>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -41,12 +44,9 @@ Timed run_world(World world, double t_end) {
           static_cast<double>(c2 - c1) / CLOCKS_PER_SEC, sim.stats()};
 }
 
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
-
-void compare(const char* name, const World& base, const World& with_idle, double t_end, int repeats,
+// Prints the case's line; returns whether the event counts with and without the idle bodies
+// agree (idle bodies far away must change nothing).
+bool compare(const char* name, const World& base, const World& with_idle, double t_end, int repeats,
              int idle) {
   std::vector<double> base_run, idle_run, base_construct, idle_construct, base_cpu, idle_cpu;
   Timed b, i;
@@ -75,6 +75,15 @@ void compare(const char* name, const World& base, const World& with_idle, double
       static_cast<unsigned long long>(i.stats.pair_checks + i.stats.bound_queries), br, ir, ir / br,
       median(idle_cpu) / median(base_cpu), bc, ic, (ic + ir) / (bc + br), repeats);
   std::fflush(stdout);
+  if (b.stats.events != i.stats.events) {
+    std::fprintf(stderr,
+                 "palpable: error: %s: %llu events without the idle bodies, %llu with them "
+                 "(idle bodies far away must change nothing)\n",
+                 name, static_cast<unsigned long long>(b.stats.events),
+                 static_cast<unsigned long long>(i.stats.events));
+    return false;
+  }
+  return true;
 }
 
 CommandRegistration registration{
@@ -85,20 +94,25 @@ CommandRegistration registration{
           "no gravity, nothing reaches them) or plus fixed cubes; and, with --scene, that scene\n"
           "plus fixed cubes 1 km away. Prints per case the medians over --repeats of the event\n"
           "loop's and the construction's wall time without and with the idle bodies, their\n"
-          "ratios, and the event and closest-feature query counts of both.");
+          "ratios, and the event and closest-feature query counts of both. Exits with 1 if the\n"
+          "event counts with and without the idle bodies differ (they must not).");
       auto idle = std::make_shared<int>(10000);
       auto repeats = std::make_shared<int>(5);
       auto spheres = std::make_shared<int>(200);
       auto gas_time = std::make_shared<double>(20.0);
       auto scene_path = std::make_shared<std::string>();
-      app.add_option("--idle", *idle, "idle bodies to add (default 10000)");
-      app.add_option("--repeats", *repeats, "runs of each variant, >= 5 (default 5)");
-      app.add_option("--spheres", *spheres, "spheres of the gas (default 200)");
-      app.add_option("--gas-time", *gas_time, "virtual time of the gas runs [s] (default 20)");
+      const int most = std::numeric_limits<int>::max();
+      app.add_option("--idle", *idle, "idle bodies to add (default 10000)")
+          ->check(CLI::Range(1, most));
+      app.add_option("--repeats", *repeats, "runs of each variant, >= 5 (default 5)")
+          ->check(CLI::Range(5, most));
+      app.add_option("--spheres", *spheres, "spheres of the gas (default 200)")
+          ->check(CLI::Range(2, most));
+      app.add_option("--gas-time", *gas_time, "virtual time of the gas runs [s] (default 20)")
+          ->check(
+              finite_range(std::numeric_limits<double>::min(), std::numeric_limits<double>::max()));
       app.add_option("--scene", *scene_path, "a scene file to run with fixed idle cubes too");
       return std::function<int()>([=] {
-        if (*repeats < 5) throw InputError("--repeats", "expected at least 5 repeats");
-        if (*idle < 1) throw InputError("--idle", "expected a positive count");
         GasOptions options;
         options.count = *spheres;
         options.walls = GasWalls::kSlabs;
@@ -107,18 +121,20 @@ CommandRegistration registration{
         const Vec3 far_W(3.0 * side + 100.0, 0.0, 0.0);  // beyond the slabs and any swept box
         World with_spheres = gas;
         add_idle_bodies(with_spheres, *idle, IdleKind::kRestingSpheres, far_W, 0.1);
-        compare("gas + resting spheres", gas, with_spheres, *gas_time, *repeats, *idle);
+        bool agree =
+            compare("gas + resting spheres", gas, with_spheres, *gas_time, *repeats, *idle);
         World with_boxes = gas;
         add_idle_bodies(with_boxes, *idle, IdleKind::kFixedBoxes, far_W, 0.1);
-        compare("gas + fixed cubes", gas, with_boxes, *gas_time, *repeats, *idle);
+        agree &= compare("gas + fixed cubes", gas, with_boxes, *gas_time, *repeats, *idle);
         if (!scene_path->empty()) {
           const Scene scene = scene_from_json(read_json_file(*scene_path), *scene_path);
           World with_cubes = scene.world;
           add_idle_bodies(with_cubes, *idle, IdleKind::kFixedBoxes, Vec3(1000.0, 1000.0, 1000.0),
                           0.1);
-          compare(scene.name.c_str(), scene.world, with_cubes, scene.end_time, *repeats, *idle);
+          agree &=
+              compare(scene.name.c_str(), scene.world, with_cubes, scene.end_time, *repeats, *idle);
         }
-        return kExitOk;
+        return agree ? kExitOk : kExitFailure;
       });
     }};
 

@@ -27,15 +27,11 @@ struct SweepCommand {
 
 int run(SweepCommand& c) {
   using namespace palpable::tools;
-  if (!c.merge.empty() && (!c.scene.empty() || !c.vary.empty() || !c.shard.empty())) {
-    throw palpable::InputError("--merge", "takes sweep tables, not a scene, --vary or --shard");
-  }
   if (c.merge.empty() && c.scene.empty()) {
     throw palpable::InputError("scene", "required: the scene file to sweep (or --merge)");
   }
-  if (!c.plot_path.empty() && find_program("gnuplot").empty()) {
-    throw std::runtime_error("--plot: gnuplot not found on PATH (Debian package gnuplot-nox)");
-  }
+  // Before the sweep runs, not after: a missing gnuplot costs nothing.
+  if (!c.plot_path.empty()) require_gnuplot();
   SweepTable table;
   std::string title;
   if (!c.merge.empty()) {
@@ -73,6 +69,8 @@ palpable::tools::CommandRegistration registration{
           "one CSV row per combination:\n"
           "  combination      index in the fixed enumeration order (the first --vary varies\n"
           "                   slowest, the last fastest), combinations (the total),\n"
+          "  sweep            the sweep's fingerprint (hash of the scene path, --set, --end and\n"
+          "                   every --vary): --merge joins only tables of one sweep,\n"
           "  /json/pointer    one column per --vary, the value as given,\n"
           "  error            the scene's primary relative error against its closed form:\n"
           "                     incline (stopping): max(|t_stop error| / t*, creep / stop "
@@ -88,6 +86,10 @@ palpable::tools::CommandRegistration registration{
           "  cpu_s            CPU time of one run, median of the --repeat runs (only timings may\n"
           "                   differ between repeats: any other difference fails the sweep),\n"
           "  events, collisions, microcollisions,\n"
+          "  trouble          kinds of numerical trouble the run met (overlapping bodies, a pair\n"
+          "                   past the collision retry limit, failed impulse integrations or\n"
+          "                   closest-feature walks: `palpable run`'s warnings); 0 when clean, a\n"
+          "                   row with trouble > 0 may be wrong,\n"
           "  then every scalar reference figure (as `palpable run` prints them; arrays as\n"
           "  name_0, name_1, ...).\n"
           "Every value is checked before anything runs; nothing is written if the sweep fails.\n\n"
@@ -102,26 +104,37 @@ palpable::tools::CommandRegistration registration{
           "  for k in 1 2 3; do palpable sweep SCENE --vary ... --shard $k/3 --out part$k.csv; "
           "done\n"
           "  palpable sweep --merge part1.csv part2.csv part3.csv --out all.csv --plot all.png");
-      app.add_option("scene", c->scene, "Scene file (JSON)");
-      app.add_option("--vary", c->vary,
-                     "/json/pointer=v1,v2,...: the values one scene value takes (each parsed as\n"
-                     "JSON, a bare word is a string; a value holding commas goes in brackets or\n"
-                     "quotes). Repeatable: the sweep runs the cartesian product.");
-      app.add_option("--set", c->options.overrides,
-                     "/json/pointer=value: a fixed override for every combination. Repeatable.");
-      app.add_option("--end", c->end, "End time [s], replacing the scene's end_time");
-      c->end_option = app.get_option("--end");
-      app.add_option("--repeat", c->options.repeat,
-                     "Runs per combination; cpu_s is their median (default 1)");
-      app.add_option("--jobs", c->options.jobs,
-                     "Combinations run at once, each in its own process (default 1). The rows\n"
-                     "come out in combination order whatever the number.");
-      app.add_option("--shard", c->shard,
-                     "K/N: run only the K-th of N disjoint slices (combination i is in slice\n"
-                     "(i mod N) + 1)");
-      app.add_option("--merge", c->merge,
-                     "Merge these sweep tables (the shards' outputs) instead of running; fails\n"
-                     "on a missing or duplicated combination");
+      CLI::Option* scene = app.add_option("scene", c->scene, "Scene file (JSON)");
+      CLI::Option* vary = app.add_option(
+          "--vary", c->vary,
+          "/json/pointer=v1,v2,...: the values one scene value takes (each parsed as\n"
+          "JSON, a bare word is a string; a value holding commas goes in brackets or\n"
+          "quotes). Repeatable: the sweep runs the cartesian product.");
+      CLI::Option* set = app.add_option(
+          "--set", c->options.overrides,
+          "/json/pointer=value: a fixed override for every combination. Repeatable.");
+      c->end_option =
+          app.add_option("--end", c->end, "End time [s], replacing the scene's end_time");
+      CLI::Option* repeat = app.add_option(
+          "--repeat", c->options.repeat, "Runs per combination; cpu_s is their median (default 1)");
+      CLI::Option* jobs =
+          app.add_option("--jobs", c->options.jobs,
+                         "Combinations run at once, each in its own process (default 1). The rows\n"
+                         "come out in combination order whatever the number.");
+      CLI::Option* shard =
+          app.add_option("--shard", c->shard,
+                         "K/N: run only the K-th of N disjoint slices (combination i is in slice\n"
+                         "(i mod N) + 1)");
+      CLI::Option* merge = app.add_option(
+          "--merge", c->merge,
+          "Merge these sweep tables (the shards' outputs) instead of running; fails\n"
+          "on a missing or duplicated combination or on tables of different sweeps.\n"
+          "Takes no scene and no run option (--vary, --set, --end, --repeat, --jobs,\n"
+          "--shard): those are the shards'.");
+      // Every run option is meaningless with --merge: CLI11 rejects the pair, naming both.
+      for (CLI::Option* run_option : {scene, vary, set, c->end_option, repeat, jobs, shard}) {
+        merge->excludes(run_option);
+      }
       app.add_option("--out", c->out_path, "Write the CSV here (atomically); default stdout");
       app.add_option("--plot", c->plot_path,
                      "Draw error (log) against CPU time (log) with the Pareto front into this PNG "

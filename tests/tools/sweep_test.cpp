@@ -89,6 +89,8 @@ TEST_CASE("a sweep run whole equals its three shards merged, row for row", "[too
     CHECK(error == std::abs(rel));
     CHECK(error < 1e-2);
     CHECK(std::stol(single.rows[r][column(single, "events")]) > 0);
+    // A clean run: no overlap, no retry-limit hit, no failed integration.
+    CHECK(single.rows[r][column(single, "trouble")] == "0");
   }
 
   std::vector<SweepTable> parts;
@@ -129,9 +131,44 @@ TEST_CASE("repeats agree in everything but timing, and merging checks completene
   CHECK_THROWS_WITH(palpable::tools::merge_sweep_tables({a, b, a}, {"a.csv", "b.csv", "c.csv"}),
                     Catch::Contains("c.csv") && Catch::Contains("appears twice"));
   SweepTable other = b;
-  other.columns[2] = "/settings/integration_tolerance";
+  other.columns[column(other, "/settings/envelope")] = "/settings/integration_tolerance";
   CHECK_THROWS_WITH(palpable::tools::merge_sweep_tables({a, other}, {"a.csv", "b.csv"}),
                     Catch::Contains("b.csv") && Catch::Contains("parameters differ"));
+}
+
+TEST_CASE("shards of different sweeps do not merge", "[tools][sweep]") {
+  using palpable::tools::sweep_fingerprint;
+  const SweepOptions base = small_sweep();
+  const std::string print = sweep_fingerprint(base);
+  CHECK(print.size() == 16);
+  CHECK(print.find_first_not_of("0123456789abcdef") == std::string::npos);
+  SweepOptions same = base;
+  same.repeat = 3;
+  same.jobs = 2;
+  same.shard = {2, 3};
+  CHECK(sweep_fingerprint(same) == print);
+  // Each of these changes the meaning of the rows, so each changes the fingerprint.
+  std::vector<SweepOptions> others(5, base);
+  others[0].scene_path = scene("block_on_ramp_decelerating.json");
+  others[1].overrides = {"/settings/envelope=1e-5"};
+  others[2].end_time = 0.4;
+  others[3].end_time.reset();
+  others[4].parameters[0] = palpable::tools::parse_vary("/settings/envelope=1e-3,1e-5");
+  for (std::size_t k = 0; k < others.size(); ++k) {
+    CAPTURE(k);
+    CHECK(sweep_fingerprint(others[k]) != print);
+  }
+
+  // Two sweeps of 2 x 2 combinations differing in one --vary value: their shards would fill
+  // the table exactly, but they are not one sweep.
+  SweepOptions a = base, b = others[4];
+  a.shard = {1, 2};
+  b.shard = {2, 2};
+  const SweepTable part_a = palpable::tools::run_sweep(a);
+  const SweepTable part_b = palpable::tools::run_sweep(b);
+  CHECK(part_a.rows[0][2] == print);
+  CHECK_THROWS_WITH(palpable::tools::merge_sweep_tables({part_a, part_b}, {"a.csv", "b.csv"}),
+                    Catch::StartsWith("b.csv row 2") && Catch::Contains("another sweep"));
 }
 
 TEST_CASE("bad sweep options are rejected before anything runs, naming the option",
@@ -167,6 +204,8 @@ TEST_CASE("bad sweep options are rejected before anything runs, naming the optio
     options.parameters = {parse_vary(c.vary)};
     CHECK_THROWS_AS(palpable::tools::run_sweep(options), InputError);
     CHECK_THROWS_WITH(palpable::tools::run_sweep(options), Catch::StartsWith(c.expected));
+    // Named once, as the --vary option, not also as the --set it is applied like.
+    CHECK_THROWS_WITH(palpable::tools::run_sweep(options), !Catch::Contains("--set"));
   }
   SweepOptions twice = small_sweep();
   twice.parameters.push_back(parse_vary("/settings/envelope=1e-5"));
@@ -183,6 +222,104 @@ TEST_CASE("bad sweep options are rejected before anything runs, naming the optio
   SweepOptions end = small_sweep();
   end.end_time = -1.0;
   CHECK_THROWS_WITH(palpable::tools::run_sweep(end), Catch::StartsWith("--end"));
+}
+
+namespace {
+
+// Writes `text` as it is (no newline translation) and returns the path.
+std::string write_file(const std::string& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+  return path;
+}
+
+const std::string kHeader =
+    "combination,combinations,sweep,/settings/envelope,error,cpu_s,events,collisions,"
+    "microcollisions,trouble,creep_m";
+
+}  // namespace
+
+TEST_CASE("malformed sweep tables are rejected naming the file and line", "[tools][sweep]") {
+  using palpable::tools::read_sweep_csv;
+  struct Case {
+    std::string what, text, expected;
+  };
+  for (const Case& c :
+       std::vector<Case>{{"empty file", "", "empty file"},
+                         {"short row", kHeader + "\n0,2,f,1e-3,0.1,0.2,10,1,9,0,0\n\n1,2,f,1e-4\n",
+                          "sweep_test_bad.csv line 4: 4 cells, the header has 11"},
+                         {"long row", kHeader + "\n0,2,f,1e-3,0.1,0.2,10,1,9,0,0,7\n",
+                          "sweep_test_bad.csv line 2: 12 cells"},
+                         {"unterminated quote", kHeader + "\n0,2,f,\"1e-3,0.1,0.2,10,1,9,0,0\n",
+                          "sweep_test_bad.csv line 2: unterminated quoted cell"},
+                         {"not a sweep", "a,b,c\n1,2,3\n", "not a sweep table"}}) {
+    CAPTURE(c.what);
+    const std::string path = write_file("sweep_test_bad.csv", c.text);
+    CHECK_THROWS_AS(read_sweep_csv(path), InputError);
+    CHECK_THROWS_WITH(read_sweep_csv(path), Catch::Contains(c.expected));
+    std::remove(path.c_str());
+  }
+}
+
+TEST_CASE("CRLF shard files merge like LF ones, and a line break in a cell becomes a space",
+          "[tools][sweep]") {
+  const std::string rows[3] = {"0,3,f,1e-3,0.1,0.2,10,1,9,0,0.5", "1,3,f,1e-4,0.01,0.3,20,1,19,0,",
+                               "2,3,f,\"a,b\",0.001,0.4,30,1,29,2,0.25"};
+  const std::string lf = write_file(
+      "sweep_test_lf.csv", kHeader + "\n" + rows[0] + "\n" + rows[1] + "\n" + rows[2] + "\n");
+  const std::string crlf_a =
+      write_file("sweep_test_crlf_a.csv", kHeader + "\r\n" + rows[0] + "\r\n" + rows[2] + "\r\n");
+  const std::string crlf_b =
+      write_file("sweep_test_crlf_b.csv", kHeader + "\r\n" + rows[1] + "\r\n");
+  const SweepTable whole = palpable::tools::read_sweep_csv(lf);
+  REQUIRE(whole.rows.size() == 3);
+  CHECK(whole.columns.back() == "creep_m");
+  CHECK(whole.rows[2][3] == "a,b");
+  const SweepTable merged = palpable::tools::merge_sweep_tables(
+      {palpable::tools::read_sweep_csv(crlf_a), palpable::tools::read_sweep_csv(crlf_b)},
+      {crlf_a, crlf_b});
+  CHECK(merged.columns == whole.columns);
+  CHECK(merged.rows == whole.rows);
+  for (const std::string& path : {lf, crlf_a, crlf_b}) std::remove(path.c_str());
+
+  SweepTable broken = whole;
+  broken.rows[0][10] = "two\nlines";
+  const SweepTable back = through_file(broken, "sweep_test_newline.csv");
+  REQUIRE(back.rows.size() == 3);
+  CHECK(back.rows[0][10] == "two lines");
+}
+
+TEST_CASE("a combination that fails when run is named with its values", "[tools][sweep]") {
+  // Each value is valid alone (validation passes), but in combination 0 the second assignment
+  // points into the emptied array, so its run fails; combination 1 runs.
+  for (int jobs : {1, 2}) {
+    CAPTURE(jobs);
+    SweepOptions options = small_sweep();
+    options.jobs = jobs;
+    options.parameters = {
+        palpable::tools::parse_vary("/materials/pairs=[],[{\"bodies\": [\"block\", \"ramp\"], "
+                                    "\"friction\": 0.3, \"restitution\": 0.0}]"),
+        palpable::tools::parse_vary("/materials/pairs/0/friction=0.2")};
+    REQUIRE(options.parameters[0].values.size() == 2);
+    CHECK_THROWS_AS(palpable::tools::run_sweep(options), InputError);
+    CHECK_THROWS_WITH(palpable::tools::run_sweep(options),
+                      Catch::StartsWith("combination 0 (/materials/pairs=[], "
+                                        "/materials/pairs/0/friction=0.2): ") &&
+                          Catch::Contains("no such place"));
+  }
+}
+
+TEST_CASE("a run's numerical trouble shows in its row", "[tools][sweep]") {
+  // As in run_scene_test: the chain of balls hits a retry limit of 1 (pairs colliding again at
+  // one instant), and runs clean with the default limit.
+  SweepOptions options;
+  options.scene_path = scene("chain_of_balls.json");
+  options.parameters = {palpable::tools::parse_vary("/settings/retry_limit=1,100")};
+  const SweepTable table = palpable::tools::run_sweep(options);
+  REQUIRE(table.rows.size() == 2);
+  const std::size_t trouble = column(table, "trouble");
+  CHECK(table.rows[0][trouble] == "1");
+  CHECK(table.rows[1][trouble] == "0");
 }
 
 TEST_CASE("the primary error of each reference type", "[tools][sweep]") {
@@ -225,11 +362,25 @@ TEST_CASE("the Pareto front and its plot", "[tools][sweep][plot]") {
   CHECK(palpable::tools::pareto_front(points) == std::vector<std::size_t>{0, 1, 3});
 
   SweepTable table;
-  table.columns = {"combination", "combinations", "/settings/envelope", "error",
-                   "cpu_s",       "events",       "collisions",         "microcollisions"};
-  table.rows = {{"0", "3", "1e-3", "1e-2", "0.1", "10", "1", "9"},
-                {"1", "3", "1e-4", "1e-4", "0.3", "30", "1", "29"},
-                {"2", "3", "1e-5", "0", "0.9", "90", "1", "89"}};
+  table.columns = {"combination", "combinations", "sweep",      "/settings/envelope", "error",
+                   "cpu_s",       "events",       "collisions", "microcollisions",    "trouble"};
+  table.rows = {{"0", "3", "f", "1e-3", "1e-2", "0.1", "10", "1", "9", "0"},
+                {"1", "3", "f", "1e-4", "1e-4", "0.3", "30", "1", "29", "0"},
+                {"2", "3", "f", "1e-5", "0", "0.9", "90", "1", "89", "1"}};
+  std::vector<ParetoPoint> labelled = palpable::tools::sweep_points(table);
+  REQUIRE(labelled.size() == 3);
+  CHECK(labelled[1].label == "1e-4");
+  CHECK(labelled[1].cpu_s == 0.3);
+  CHECK(labelled[1].error == 1e-4);
+  // A label gnuplot cannot quote, or too long a one: the combination index instead.
+  SweepTable awkward = table;
+  awkward.rows[0][3] = "say \"hi\"";
+  awkward.rows[1][3] = std::string(25, 'x');
+  labelled = palpable::tools::sweep_points(awkward);
+  CHECK(labelled[0].label == "#0");
+  CHECK(labelled[1].label == "#1");
+  CHECK(labelled[2].label == "1e-5");
+
   const std::string png = "sweep_test_pareto.png";
   palpable::tools::plot_sweep(table, png, "test");
   std::ifstream in(png, std::ios::binary);

@@ -331,6 +331,16 @@ std::string find_program(const std::string& name) {
   return {};
 }
 
+std::string require_gnuplot(const std::string& name) {
+  const std::string program = find_program(name);
+  if (program.empty()) {
+    throw std::runtime_error("gnuplot not found (looked for \"" + name +
+                             "\" on PATH): install the Debian package gnuplot-nox "
+                             "(tools/setup does)");
+  }
+  return program;
+}
+
 namespace {
 // Writes the script into dir, runs gnuplot on it and renames the PNG over `out_path` only when
 // gnuplot succeeded.
@@ -354,16 +364,6 @@ void render(const std::string& program, const TempDir& dir, const std::string& s
     throw std::runtime_error("gnuplot failed (status " + std::to_string(status) + "): " + messages);
   }
   fs::rename(temp_png, out);
-}
-
-std::string require_gnuplot(const std::string& name) {
-  const std::string program = find_program(name);
-  if (program.empty()) {
-    throw std::runtime_error("gnuplot not found (looked for \"" + name +
-                             "\" on PATH): install the Debian package gnuplot-nox "
-                             "(tools/setup does)");
-  }
-  return program;
 }
 
 }  // namespace

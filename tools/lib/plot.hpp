@@ -32,6 +32,9 @@ PlotKind parse_plot_kind(const std::string& text);
 
 // The program's full path if it is found (a path, or on PATH), else empty.
 std::string find_program(const std::string& name);
+// The same, but throws std::runtime_error naming the program and the Debian package to install
+// (gnuplot-nox) if it is not found.
+std::string require_gnuplot(const std::string& name = "gnuplot");
 
 // Draws the plot. Throws InputError for bad input, std::runtime_error if gnuplot is missing or
 // fails (its messages included).

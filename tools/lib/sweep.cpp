@@ -2,6 +2,7 @@
 
 #include "core/check.hpp"
 #include "scenarios/scene.hpp"
+#include "tools/lib/median.hpp"
 #include "tools/lib/plot.hpp"
 
 #include <poll.h>
@@ -10,7 +11,9 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <csignal>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -29,9 +32,9 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // The columns every table starts and ends its fixed part with.
-const std::vector<std::string> kLeading{"combination", "combinations"};
-const std::vector<std::string> kMeasured{"error", "cpu_s", "events", "collisions",
-                                         "microcollisions"};
+const std::vector<std::string> kLeading{"combination", "combinations", "sweep"};
+const std::vector<std::string> kMeasured{"error",      "cpu_s",           "events",
+                                         "collisions", "microcollisions", "trouble"};
 
 std::string trim(const std::string& text) {
   const auto first = text.find_first_not_of(" \t");
@@ -112,25 +115,24 @@ json run_combination(const SweepOptions& options, std::size_t index) {
     json measured = {{"events", result.stats.events},
                      {"collisions", result.stats.collisions},
                      {"microcollisions", result.stats.microcollisions},
+                     {"trouble", numerical_trouble(result.stats).size()},
                      {"reference", result.reference}};
     if (r == 0) {
       first = measured;
-    } else if (measured != first) {
-      // The simulation is deterministic: repeats may differ in their timings only.
-      throw std::runtime_error("combination " + std::to_string(index) + ": repeat " +
-                               std::to_string(r + 1) + " differs from the first (" +
+    } else if (measured.dump() != first.dump()) {
+      // The simulation is deterministic: repeats may differ in their timings only. Compared as
+      // text, since a NaN figure is unequal to itself as a number.
+      throw std::runtime_error("repeat " + std::to_string(r + 1) + " differs from the first (" +
                                measured.dump() + " against " + first.dump() + ")");
     }
   }
-  std::sort(cpu.begin(), cpu.end());
-  const std::size_t n = cpu.size();
-  first["cpu_s"] = n % 2 == 1 ? cpu[n / 2] : 0.5 * (cpu[n / 2 - 1] + cpu[n / 2]);
+  first["cpu_s"] = median(cpu);
   return first;
 }
 
 // A failure inside a worker, carried to the parent as JSON and rethrown there with its type.
-json failure(const std::exception& e, bool input) {
-  return json{{"failed", e.what()}, {"input_error", input}};
+json failure(const std::string& message, bool input) {
+  return json{{"failed", message}, {"input_error", input}};
 }
 
 void rethrow_if_failed(const json& measured) {
@@ -140,13 +142,25 @@ void rethrow_if_failed(const json& measured) {
   throw std::runtime_error(it->get<std::string>());
 }
 
+// "combination i (/p=v, ...)": what names a combination in an error.
+std::string combination_name(const SweepOptions& options, std::size_t index) {
+  const std::vector<std::size_t> digits = combination_digits(options.parameters, index);
+  std::string values;
+  for (std::size_t p = 0; p < options.parameters.size(); ++p) {
+    values += (p ? ", " : "") + options.parameters[p].pointer + "=" +
+              options.parameters[p].values[digits[p]];
+  }
+  return "combination " + std::to_string(index) + " (" + values + ")";
+}
+
+// A failure, its message prefixed by the combination it came from.
 json run_combination_caught(const SweepOptions& options, std::size_t index) {
   try {
     return run_combination(options, index);
   } catch (const InputError& e) {
-    return failure(e, true);
+    return failure(combination_name(options, index) + ": " + e.what(), true);
   } catch (const std::exception& e) {
-    return failure(e, false);
+    return failure(combination_name(options, index) + ": " + e.what(), false);
   }
 }
 
@@ -232,14 +246,24 @@ std::vector<json> run_forked(const SweepOptions& options, const std::vector<std:
       const pid_t pid = ::fork();
       if (pid < 0) throw std::runtime_error("sweep: cannot fork a worker");
       if (pid == 0) {
-        ::close(fds[0]);
-        const std::string text = run_combination_caught(options, indices[slot]).dump();
-        std::size_t written = 0;
-        while (written < text.size()) {
-          const ssize_t n = ::write(fds[1], text.data() + written, text.size() - written);
-          if (n < 0 && errno == EINTR) continue;
-          if (n <= 0) ::_exit(1);
-          written += static_cast<std::size_t>(n);
+        // The child never returns into the parent's code: whatever it throws (bad_alloc, a
+        // JSON error) ends it with status 2, which the parent reports as a dead worker.
+        try {
+          // Stopped by the parent with SIGTERM: die, whatever handler the parent installed.
+          ::signal(SIGTERM, SIG_DFL);
+          ::close(fds[0]);
+          // Invalid UTF-8 in a message (a scene string) is replaced, not thrown.
+          const std::string text = run_combination_caught(options, indices[slot])
+                                       .dump(-1, ' ', false, json::error_handler_t::replace);
+          std::size_t written = 0;
+          while (written < text.size()) {
+            const ssize_t n = ::write(fds[1], text.data() + written, text.size() - written);
+            if (n < 0 && errno == EINTR) continue;
+            if (n <= 0) ::_exit(1);
+            written += static_cast<std::size_t>(n);
+          }
+        } catch (...) {
+          ::_exit(2);
         }
         ::_exit(0);
       }
@@ -322,10 +346,15 @@ std::vector<std::string> split_csv_line(const std::string& line, const std::stri
   return cells;
 }
 
+// A cell as CSV: quoted if it holds a comma or a quote. A line break becomes a space, since the
+// reader takes one line per row.
 std::string csv_cell(const std::string& text) {
-  if (text.find_first_of(",\"\n") == std::string::npos) return text;
+  std::string flat = text;
+  std::replace(flat.begin(), flat.end(), '\n', ' ');
+  std::replace(flat.begin(), flat.end(), '\r', ' ');
+  if (flat.find_first_of(",\"") == std::string::npos) return flat;
   std::string out = "\"";
-  for (char c : text) {
+  for (char c : flat) {
     if (c == '"') out += '"';
     out += c;
   }
@@ -334,26 +363,26 @@ std::string csv_cell(const std::string& text) {
 
 // Where the fixed columns are; throws InputError naming `where` if a table lacks them.
 struct Layout {
-  std::size_t first_parameter = 2;
-  std::size_t error = 0;    // index of "error": parameters are [2, error)
+  std::size_t error = 0;    // index of "error": parameters are [kLeading.size(), error)
   std::size_t figures = 0;  // index of the first figure column
 };
 
 Layout layout_of(const SweepTable& table, const std::string& where) {
   const auto& c = table.columns;
-  if (c.size() < kLeading.size() + kMeasured.size() || c[0] != kLeading[0] || c[1] != kLeading[1]) {
+  if (c.size() < kLeading.size() + kMeasured.size() ||
+      !std::equal(kLeading.begin(), kLeading.end(), c.begin())) {
     throw InputError(where,
-                     "not a sweep table (expected the columns combination,combinations,"
-                     "...,error,cpu_s,events,collisions,microcollisions,...)");
+                     "not a sweep table (expected the columns combination,combinations,sweep,"
+                     "...,error,cpu_s,events,collisions,microcollisions,trouble,...)");
   }
-  auto it = std::find(c.begin() + 2, c.end(), kMeasured[0]);
+  auto it = std::find(c.begin() + kLeading.size(), c.end(), kMeasured[0]);
   Layout layout;
   layout.error = static_cast<std::size_t>(it - c.begin());
   for (std::size_t k = 0; k < kMeasured.size(); ++k) {
     if (layout.error + k >= c.size() || c[layout.error + k] != kMeasured[k]) {
       throw InputError(where,
                        "not a sweep table (expected the columns error,cpu_s,events,"
-                       "collisions,microcollisions after the parameters)");
+                       "collisions,microcollisions,trouble after the parameters)");
     }
   }
   layout.figures = layout.error + kMeasured.size();
@@ -390,7 +419,6 @@ Shard parse_shard(const std::string& text) {
 std::size_t combination_count(const std::vector<SweepParameter>& parameters) {
   std::size_t count = 1;
   for (const SweepParameter& p : parameters) {
-    if (p.values.empty()) throw InputError("--vary " + p.pointer, "expected at least one value");
     if (count > std::numeric_limits<std::size_t>::max() / p.values.size() ||
         count * p.values.size() > 100000000) {
       throw InputError("--vary", "more than 1e8 combinations");
@@ -408,6 +436,25 @@ std::vector<std::size_t> combination_digits(const std::vector<SweepParameter>& p
     index /= parameters[p].values.size();
   }
   return digits;
+}
+
+std::string sweep_fingerprint(const SweepOptions& options) {
+  std::string text = "scene=" + options.scene_path + "\n";
+  for (const std::string& assignment : options.overrides) text += "set=" + assignment + "\n";
+  text += "end=" + (options.end_time ? number_text(*options.end_time) : std::string()) + "\n";
+  for (const SweepParameter& p : options.parameters) {
+    text += "vary=" + p.pointer + "\n";
+    for (const std::string& value : p.values) text += "value=" + value + "\n";
+  }
+  // FNV-1a, 64 bits (Fowler, Noll, Vo): deterministic on every platform.
+  std::uint64_t hash = 14695981039346656037ull;
+  for (unsigned char c : text) {
+    hash ^= c;
+    hash *= 1099511628211ull;
+  }
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(hash));
+  return hex;
 }
 
 double primary_error(const json& reference) {
@@ -450,10 +497,6 @@ SweepTable run_sweep(const SweepOptions& options) {
   }
   if (options.repeat < 1) throw InputError("--repeat", "expected a whole number >= 1");
   if (options.jobs < 1) throw InputError("--jobs", "expected a whole number >= 1");
-  if (options.shard.count == 0 || options.shard.index == 0 ||
-      options.shard.index > options.shard.count) {
-    throw InputError("--shard", "expected K/N with 1 <= K <= N");
-  }
   if (options.end_time && !(*options.end_time > 0.0 && std::isfinite(*options.end_time))) {
     throw InputError("--end", "expected a positive number of seconds");
   }
@@ -478,11 +521,19 @@ SweepTable run_sweep(const SweepOptions& options) {
         apply_override(document, assignment);
         scene_from_json(document, options.scene_path);
       } catch (const InputError& e) {
-        throw InputError("--vary " + assignment, e.what());
+        // apply_override names the assignment as "--set ...": say it once, as --vary.
+        const std::string what = e.what();
+        const std::string set = "--set " + assignment + ": ";
+        throw InputError("--vary " + assignment,
+                         what.compare(0, set.size(), set) == 0 ? what.substr(set.size()) : what);
       }
     }
   }
 
+  // The shard comes from parse_shard (or is the default 1/1), which validated it.
+  PALPABLE_CHECK(options.shard.index >= 1 && options.shard.index <= options.shard.count,
+                 "a shard K/N with 1 <= K <= N");
+  const std::string fingerprint = sweep_fingerprint(options);
   std::vector<std::size_t> indices;
   for (std::size_t i = options.shard.index - 1; i < total; i += options.shard.count) {
     indices.push_back(i);
@@ -491,14 +542,14 @@ SweepTable run_sweep(const SweepOptions& options) {
   std::vector<json> measured;
   if (options.jobs == 1 || indices.size() <= 1) {
     for (std::size_t i : indices) {
-      measured.push_back(json::parse(run_combination_caught(options, i).dump()));
+      measured.push_back(json::parse(
+          run_combination_caught(options, i).dump(-1, ' ', false, json::error_handler_t::replace)));
       rethrow_if_failed(measured.back());
       progress.done();
     }
   } else {
     measured = run_forked(options, indices, &progress);
   }
-  for (const json& m : measured) rethrow_if_failed(m);
 
   std::vector<std::map<std::string, std::string>> figures(measured.size());
   std::set<std::string> figure_names;
@@ -519,7 +570,7 @@ SweepTable run_sweep(const SweepOptions& options) {
   table.columns.insert(table.columns.end(), figure_names.begin(), figure_names.end());
   for (std::size_t k = 0; k < measured.size(); ++k) {
     const json& m = measured[k];
-    std::vector<std::string> row{std::to_string(indices[k]), std::to_string(total)};
+    std::vector<std::string> row{std::to_string(indices[k]), std::to_string(total), fingerprint};
     const std::vector<std::size_t> digits = combination_digits(options.parameters, indices[k]);
     for (std::size_t p = 0; p < options.parameters.size(); ++p) {
       row.push_back(options.parameters[p].values[digits[p]]);
@@ -529,6 +580,7 @@ SweepTable run_sweep(const SweepOptions& options) {
     row.push_back(cell_text(m["events"]));
     row.push_back(cell_text(m["collisions"]));
     row.push_back(cell_text(m["microcollisions"]));
+    row.push_back(cell_text(m["trouble"]));
     for (const std::string& name : figure_names) {
       auto it = figures[k].find(name);
       row.push_back(it == figures[k].end() ? std::string() : it->second);
@@ -541,13 +593,14 @@ SweepTable run_sweep(const SweepOptions& options) {
 SweepTable merge_sweep_tables(const std::vector<SweepTable>& parts,
                               const std::vector<std::string>& where) {
   if (parts.empty()) throw InputError("--merge", "expected at least one sweep table");
+  const std::ptrdiff_t first_parameter = static_cast<std::ptrdiff_t>(kLeading.size());
   std::vector<Layout> layouts;
   for (std::size_t k = 0; k < parts.size(); ++k) layouts.push_back(layout_of(parts[k], where[k]));
-  const std::vector<std::string> parameters(parts[0].columns.begin() + 2,
+  const std::vector<std::string> parameters(parts[0].columns.begin() + first_parameter,
                                             parts[0].columns.begin() + layouts[0].error);
   std::set<std::string> figure_names;
   for (std::size_t k = 0; k < parts.size(); ++k) {
-    const std::vector<std::string> mine(parts[k].columns.begin() + 2,
+    const std::vector<std::string> mine(parts[k].columns.begin() + first_parameter,
                                         parts[k].columns.begin() + layouts[k].error);
     if (mine != parameters) {
       throw InputError(where[k], "its varied parameters differ from those of " + where[0]);
@@ -561,9 +614,14 @@ SweepTable merge_sweep_tables(const std::vector<SweepTable>& parts,
   merged.columns.insert(merged.columns.end(), figure_names.begin(), figure_names.end());
 
   std::optional<std::size_t> total;
+  std::optional<std::pair<std::string, std::string>> fingerprint;  // the value, where first seen
   std::map<std::size_t, std::pair<std::vector<std::string>, std::string>> rows;
   for (std::size_t k = 0; k < parts.size(); ++k) {
     const SweepTable& part = parts[k];
+    std::map<std::string, std::size_t> figure_column;
+    for (std::size_t c = layouts[k].figures; c < part.columns.size(); ++c) {
+      figure_column[part.columns[c]] = c;
+    }
     for (std::size_t r = 0; r < part.rows.size(); ++r) {
       const std::vector<std::string>& row = part.rows[r];
       const std::string here = where[k] + " row " + std::to_string(r + 2);
@@ -572,6 +630,13 @@ SweepTable merge_sweep_tables(const std::vector<SweepTable>& parts,
           !parse_size(row[1], &count)) {
         throw InputError(here, "expected " + std::to_string(part.columns.size()) +
                                    " cells starting with the combination and the total");
+      }
+      if (!fingerprint) {
+        fingerprint = std::make_pair(row[2], here);
+      } else if (fingerprint->first != row[2]) {
+        throw InputError(here, "from another sweep (fingerprint " + row[2] + ", " +
+                                   fingerprint->second + " has " + fingerprint->first +
+                                   "): a different scene, --set, --end or --vary values");
       }
       if (total && *total != count) {
         throw InputError(here, "a sweep of " + std::to_string(count) + " combinations, the " +
@@ -583,9 +648,8 @@ SweepTable merge_sweep_tables(const std::vector<SweepTable>& parts,
       }
       std::vector<std::string> aligned(row.begin(), row.begin() + layouts[k].figures);
       for (const std::string& name : figure_names) {
-        auto it = std::find(part.columns.begin() + layouts[k].figures, part.columns.end(), name);
-        aligned.push_back(it == part.columns.end() ? std::string()
-                                                   : row[it - part.columns.begin()]);
+        auto it = figure_column.find(name);
+        aligned.push_back(it == figure_column.end() ? std::string() : row[it->second]);
       }
       auto [it, inserted] = rows.emplace(index, std::make_pair(aligned, here));
       if (!inserted) {
@@ -626,19 +690,32 @@ SweepTable read_sweep_csv(const std::string& path) {
   if (!in) throw InputError(path, "cannot open the sweep table");
   SweepTable table;
   std::string text;
-  if (!std::getline(in, text)) throw InputError(path, "empty file, expected a sweep table");
-  table.columns = split_csv_line(text, path + " row 1");
+  // A file written on (or through) Windows ends its lines with CR LF: the CR is not a cell's.
+  auto next_line = [&in, &text] {
+    if (!std::getline(in, text)) return false;
+    if (!text.empty() && text.back() == '\r') text.pop_back();
+    return true;
+  };
+  if (!next_line() || text.empty()) {
+    throw InputError(path, "empty file, expected a sweep table (a header line first)");
+  }
+  table.columns = split_csv_line(text, path + " line 1");
   std::size_t number = 1;
-  while (std::getline(in, text)) {
+  while (next_line()) {
     ++number;
     if (text.empty()) continue;
-    table.rows.push_back(split_csv_line(text, path + " row " + std::to_string(number)));
+    const std::string here = path + " line " + std::to_string(number);
+    table.rows.push_back(split_csv_line(text, here));
+    if (table.rows.back().size() != table.columns.size()) {
+      throw InputError(here, std::to_string(table.rows.back().size()) + " cells, the header has " +
+                                 std::to_string(table.columns.size()));
+    }
   }
   layout_of(table, path);
   return table;
 }
 
-void plot_sweep(const SweepTable& table, const std::string& png_path, const std::string& title) {
+std::vector<ParetoPoint> sweep_points(const SweepTable& table) {
   const Layout layout = layout_of(table, "--plot");
   std::vector<ParetoPoint> points;
   for (const auto& row : table.rows) {
@@ -653,13 +730,19 @@ void plot_sweep(const SweepTable& table, const std::string& png_path, const std:
     p.error = number(row[layout.error]);
     p.cpu_s = number(row[layout.error + 1]);
     std::string values;
-    for (std::size_t c = layout.first_parameter; c < layout.error; ++c) {
+    for (std::size_t c = kLeading.size(); c < layout.error; ++c) {
       values += (values.empty() ? "" : ",") + row[c];
     }
-    p.label = values.empty() || values.size() > 24 ? "#" + row[0] : values;
+    // gnuplot reads the label as a quoted string: one holding a quote falls back to the index.
+    const bool unquotable = values.find('"') != std::string::npos;
+    p.label = values.empty() || values.size() > 24 || unquotable ? "#" + row[0] : values;
     points.push_back(p);
   }
-  plot_pareto(points, title, png_path);
+  return points;
+}
+
+void plot_sweep(const SweepTable& table, const std::string& png_path, const std::string& title) {
+  plot_pareto(sweep_points(table), title, png_path);
 }
 
 }  // namespace palpable::tools
