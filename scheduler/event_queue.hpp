@@ -25,6 +25,7 @@ struct Event {
   EventKind kind = EventKind::kPairCheck;
   BodyId a;                    // for pair events a < b
   BodyId b;                    // invalid for single-body and global events
+  std::uint32_t owner = 0;     // what the event is for (a pair's slot); not part of the order
   std::uint64_t sequence = 0;  // assigned by the queue on push/update
 };
 

@@ -13,15 +13,10 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <unordered_map>
 
 namespace palpable {
 
 namespace {
-
-std::uint64_t pair_key(BodyId a, BodyId b) {
-  return (static_cast<std::uint64_t>(a.index) << 32) | b.index;
-}
 
 // The box swept by a point moving as x0 + v s + g s^2 / 2 for s in [0, dt], per axis.
 Aabb parabola_box(const Vec3& x0, const Vec3& v, const Vec3& g, double dt) {
@@ -147,14 +142,16 @@ struct Simulation::Impl {
   std::vector<BodyRuntime> bodies;
   std::vector<PairRuntime> pairs;
   std::vector<std::uint32_t> free_pairs;
-  std::unordered_map<std::uint64_t, std::uint32_t> pair_index;
+  std::size_t live_pairs = 0;
   EventQueue::EventId sample_event = EventQueue::kNoEvent;
   std::vector<std::uint32_t> rebound_scratch;  // pairs re-bounded after a collision (reused)
   std::uint64_t next_sample = 0;
   // The swept boxes, dynamic bodies apart from fixed and kinematic ones: a non-dynamic body
   // looks only among the dynamic ones, so two non-dynamic bodies are never even compared.
   BroadPhase dynamic_boxes, static_boxes;
-  std::vector<std::uint32_t> overlapping, partners;  // scratch of refresh_broad_phase
+  std::vector<std::uint32_t> overlapping;  // scratch of refresh_broad_phase
+  // Scratch of refresh_broad_phase: (the other body, the pair) for each pair of a body.
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> partners;
 
   Impl(Simulation& s, QueueImpl impl) : sim(s), queue(impl) {}
 
@@ -264,11 +261,11 @@ struct Simulation::Impl {
     p.a = a;
     p.b = b;
     p.live = true;
-    pair_index.emplace(pair_key(a, b), index);
     bodies[a.index].pairs.push_back(index);
     bodies[b.index].pairs.push_back(index);
+    ++live_pairs;
     ++sim.stats_.pairs_created;
-    sim.stats_.max_pairs = std::max<std::uint64_t>(sim.stats_.max_pairs, pair_index.size());
+    sim.stats_.max_pairs = std::max<std::uint64_t>(sim.stats_.max_pairs, live_pairs);
     return index;
   }
 
@@ -279,7 +276,7 @@ struct Simulation::Impl {
       auto& list = bodies[id.index].pairs;
       list.erase(std::find(list.begin(), list.end(), index));
     }
-    pair_index.erase(pair_key(p.a, p.b));
+    --live_pairs;
     p.live = false;
     free_pairs.push_back(index);
   }
@@ -311,23 +308,24 @@ struct Simulation::Impl {
     partners.clear();
     for (std::uint32_t index : bodies[id.index].pairs) {
       const PairRuntime& p = pairs[index];
-      partners.push_back(p.a == id ? p.b.index : p.a.index);
+      partners.emplace_back(p.a == id ? p.b.index : p.a.index, index);
     }
     std::sort(partners.begin(), partners.end());
     auto o = overlapping.begin();
     auto q = partners.begin();
     while (o != overlapping.end() || q != partners.end()) {
-      const std::uint32_t j = q == partners.end() || (o != overlapping.end() && *o < *q) ? *o : *q;
+      const std::uint32_t j =
+          q == partners.end() || (o != overlapping.end() && *o < q->first) ? *o : q->first;
       const bool overlap = o != overlapping.end() && *o == j;
-      const bool paired = q != partners.end() && *q == j;
+      const bool paired = q != partners.end() && q->first == j;
+      const std::uint32_t pair = paired ? q->second : 0;
       if (overlap) ++o;
       if (paired) ++q;
       if (overlap == paired) continue;
-      BodyId a{std::min(id.index, j)}, b{std::max(id.index, j)};
       if (overlap) {
-        create_pair(a, b);
+        create_pair(BodyId{std::min(id.index, j)}, BodyId{std::max(id.index, j)});
       } else {
-        remove_pair(pair_index.at(pair_key(a, b)));
+        remove_pair(pair);
       }
     }
   }
@@ -819,6 +817,7 @@ struct Simulation::Impl {
     e.kind = EventKind::kPairCheck;
     e.a = p.a;
     e.b = p.b;
+    e.owner = index;
     if (p.event == EventQueue::kNoEvent) {
       p.event = queue.push(e);
     } else {
@@ -1017,9 +1016,10 @@ void Simulation::run_until(double t_end, SimulationObserver* observer,
     ++stats_.events;
     switch (e.kind) {
       case EventKind::kPairCheck: {
-        auto it = im.pair_index.find(pair_key(e.a, e.b));
-        PALPABLE_CHECK(it != im.pair_index.end(), "pair event without a pair");
-        im.check_pair(it->second, e.t, observer);
+        PALPABLE_CHECK(e.owner < im.pairs.size() && im.pairs[e.owner].event == id &&
+                           im.pairs[e.owner].a == e.a && im.pairs[e.owner].b == e.b,
+                       "pair event without its pair");
+        im.check_pair(e.owner, e.t, observer);
         break;
       }
       case EventKind::kHorizon:
