@@ -81,7 +81,7 @@ class SimulationObserver {
 
 struct SimulationOptions {
   double output_interval = 0.0;  // [s]; 0: no samples
-  QueueImpl queue = QueueImpl::kHeap;
+  QueueImpl queue = QueueImpl::kIndexed;
 };
 
 class Simulation {

@@ -1,4 +1,5 @@
-// The Boost.Heap event queue against the linear-scan reference queue, and the strict order.
+// The indexed and Boost.Heap event queues against the linear-scan reference queue, and the strict
+// order.
 #include "scheduler/event_queue.hpp"
 
 #include "core/check.hpp"
@@ -26,7 +27,7 @@ Event make_event(double t, EventKind kind, std::uint32_t a, std::uint32_t b) {
 }  // namespace
 
 TEST_CASE("events pop in (time, kind, ids, sequence) order", "[scheduler][queue]") {
-  for (QueueImpl impl : {QueueImpl::kHeap, QueueImpl::kReference}) {
+  for (QueueImpl impl : {QueueImpl::kIndexed, QueueImpl::kBoost, QueueImpl::kReference}) {
     EventQueue q(impl);
     q.push(make_event(1.0, EventKind::kSample, 0, 1));
     q.push(make_event(1.0, EventKind::kPairCheck, 2, 3));
@@ -47,63 +48,66 @@ TEST_CASE("events pop in (time, kind, ids, sequence) order", "[scheduler][queue]
   }
 }
 
-TEST_CASE("heap queue gives the identical event sequence as the reference queue",
+TEST_CASE("both heap queues give the identical event sequence as the reference queue",
           "[scheduler][queue]") {
-  const std::uint64_t seed = 20261121;
-  CAPTURE(seed);
-  std::mt19937_64 rng(seed);
-  EventQueue heap(QueueImpl::kHeap);
-  EventQueue reference(QueueImpl::kReference);
-  std::vector<EventQueue::EventId> live;
-  std::uniform_int_distribution<int> op(0, 9);
-  // Coarse times so that ties (resolved by kind, ids, sequence) are frequent.
-  std::uniform_int_distribution<int> tick(0, 50);
-  std::uniform_int_distribution<std::uint32_t> body(0, 6);
-  std::uniform_int_distribution<int> kind(0, 2);
-  double now = 0.0;
-  std::size_t pops = 0;
-  for (int step = 0; step < 100000; ++step) {
-    int o = op(rng);
-    Event e =
-        make_event(now + 0.01 * tick(rng), static_cast<EventKind>(kind(rng)), body(rng), body(rng));
-    if (o < 4 || live.empty()) {
-      auto id_heap = heap.push(e);
-      auto id_ref = reference.push(e);
-      REQUIRE(id_heap == id_ref);  // same id allocation: same free-list use
-      live.push_back(id_heap);
-    } else if (o < 6) {
-      std::size_t k = std::uniform_int_distribution<std::size_t>(0, live.size() - 1)(rng);
-      heap.update(live[k], e);
-      reference.update(live[k], e);
-    } else if (o < 7) {
-      std::size_t k = std::uniform_int_distribution<std::size_t>(0, live.size() - 1)(rng);
-      heap.erase(live[k]);
-      reference.erase(live[k]);
-      live[k] = live.back();
-      live.pop_back();
-    } else {
-      EventQueue::EventId id_heap, id_ref;
-      Event x = heap.pop(&id_heap);
-      Event y = reference.pop(&id_ref);
-      REQUIRE(id_heap == id_ref);
-      REQUIRE(x.t == y.t);
-      REQUIRE(x.kind == y.kind);
-      REQUIRE(x.a == y.a);
-      REQUIRE(x.b == y.b);
-      REQUIRE(x.sequence == y.sequence);
-      now = x.t;  // time never runs back, as in the event loop
-      for (auto& id : live) {
-        if (id == id_heap) {
-          id = live.back();
-          live.pop_back();
-          break;
+  for (QueueImpl impl : {QueueImpl::kIndexed, QueueImpl::kBoost}) {
+    CAPTURE(static_cast<int>(impl));
+    const std::uint64_t seed = 20261121;
+    CAPTURE(seed);
+    std::mt19937_64 rng(seed);
+    EventQueue heap(impl);
+    EventQueue reference(QueueImpl::kReference);
+    std::vector<EventQueue::EventId> live;
+    std::uniform_int_distribution<int> op(0, 9);
+    // Coarse times so that ties (resolved by kind, ids, sequence) are frequent.
+    std::uniform_int_distribution<int> tick(0, 50);
+    std::uniform_int_distribution<std::uint32_t> body(0, 6);
+    std::uniform_int_distribution<int> kind(0, 2);
+    double now = 0.0;
+    std::size_t pops = 0;
+    for (int step = 0; step < 100000; ++step) {
+      int o = op(rng);
+      Event e = make_event(now + 0.01 * tick(rng), static_cast<EventKind>(kind(rng)), body(rng),
+                           body(rng));
+      if (o < 4 || live.empty()) {
+        auto id_heap = heap.push(e);
+        auto id_ref = reference.push(e);
+        REQUIRE(id_heap == id_ref);  // same id allocation: same free-list use
+        live.push_back(id_heap);
+      } else if (o < 6) {
+        std::size_t k = std::uniform_int_distribution<std::size_t>(0, live.size() - 1)(rng);
+        heap.update(live[k], e);
+        reference.update(live[k], e);
+      } else if (o < 7) {
+        std::size_t k = std::uniform_int_distribution<std::size_t>(0, live.size() - 1)(rng);
+        heap.erase(live[k]);
+        reference.erase(live[k]);
+        live[k] = live.back();
+        live.pop_back();
+      } else {
+        EventQueue::EventId id_heap, id_ref;
+        Event x = heap.pop(&id_heap);
+        Event y = reference.pop(&id_ref);
+        REQUIRE(id_heap == id_ref);
+        REQUIRE(x.t == y.t);
+        REQUIRE(x.kind == y.kind);
+        REQUIRE(x.a == y.a);
+        REQUIRE(x.b == y.b);
+        REQUIRE(x.sequence == y.sequence);
+        now = x.t;  // time never runs back, as in the event loop
+        for (auto& id : live) {
+          if (id == id_heap) {
+            id = live.back();
+            live.pop_back();
+            break;
+          }
         }
+        ++pops;
       }
-      ++pops;
+      REQUIRE(heap.size() == reference.size());
     }
-    REQUIRE(heap.size() == reference.size());
+    CHECK(pops > 10000);
   }
-  CHECK(pops > 10000);
 }
 
 TEST_CASE("misuse of event ids is an invariant error", "[scheduler][queue]") {
