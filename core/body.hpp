@@ -32,13 +32,16 @@ struct BodyState {
   Vec3 w_W = Vec3::Zero();          // angular velocity [rad/s]
 };
 
+// The members an event reads first (motion, state, then mass) lead, so that advancing a body
+// reads two or three cache lines of it, not five (the scheduler touches the bodies of a 10,000-
+// sphere gas in no useful order).
 struct Body {
-  std::string name;
   MotionKind motion = MotionKind::kDynamic;
-  std::shared_ptr<const Shape> shape;
-  MassProperties mass;
-  KinematicMotion kinematic;  // used when motion == kKinematic
   BodyState state;
+  MassProperties mass;
+  std::shared_ptr<const Shape> shape;
+  KinematicMotion kinematic;  // used when motion == kKinematic
+  std::string name;
 
   bool is_dynamic() const { return motion == MotionKind::kDynamic; }
 };

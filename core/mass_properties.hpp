@@ -7,11 +7,12 @@
 namespace palpable {
 
 struct MassProperties {
+  // What advancing a free rotation reads comes first (see Body).
+  Quat q_MB = Quat::Identity();  // principal frame B in modelling frame M: v_M = q_MB * v_B
+  Vec3 principal_moments = Vec3::Zero();  // I_B = diag(I1, I2, I3) [kg m^2], ascending
   double mass = 0.0;                      // [kg]; +inf for fixed and kinematic bodies
   double inv_mass = 0.0;                  // [1/kg]; 0 for fixed and kinematic bodies
   Mat3 inertia_M = Mat3::Zero();          // [kg m^2] about the centre of mass, modelling frame
-  Vec3 principal_moments = Vec3::Zero();  // I_B = diag(I1, I2, I3) [kg m^2], ascending
-  Quat q_MB = Quat::Identity();  // principal frame B in modelling frame M: v_M = q_MB * v_B
 
   bool is_infinite() const { return inv_mass == 0.0; }
   // Inverse inertia about the centre of mass in M [1/(kg m^2)]; zero for infinite mass.
