@@ -106,6 +106,7 @@ struct Simulation::Impl {
     bool live = false;
     double last_collision_t = -kInfinity;
     int collisions_at_t = 0;
+    std::uint64_t rebound_round = 0;  // the last refresh_after_collision that re-bounded it
   };
   // Everything the collision of a pair needs, in the world frame; body 1 = a, body 2 = b.
   struct Contact {
@@ -145,6 +146,7 @@ struct Simulation::Impl {
   std::size_t live_pairs = 0;
   EventQueue::EventId sample_event = EventQueue::kNoEvent;
   std::vector<std::uint32_t> rebound_scratch;  // pairs re-bounded after a collision (reused)
+  std::uint64_t rebound_round = 0;             // refresh_after_collision calls so far
   std::uint64_t next_sample = 0;
   // The swept boxes, dynamic bodies apart from fixed and kinematic ones: a non-dynamic body
   // looks only among the dynamic ones, so two non-dynamic bodies are never even compared.
@@ -360,15 +362,30 @@ struct Simulation::Impl {
       if (body(id).is_dynamic()) refresh_broad_phase(id, t);
     });
     rebound_scratch.clear();
+    ++rebound_round;
     each_moved([&](BodyId id) {
       if (!body(id).is_dynamic()) return;
       for (std::uint32_t index : bodies[id.index].pairs) {
-        if (std::find(rebound_scratch.begin(), rebound_scratch.end(), index) ==
-            rebound_scratch.end()) {
-          rebound_scratch.push_back(index);
-        }
+        PairRuntime& p = pairs[index];
+        if (p.rebound_round == rebound_round) continue;  // a pair of two moved bodies: once
+        p.rebound_round = rebound_round;
+        rebound_scratch.push_back(index);
       }
     });
+    // The other bodies of these pairs lie anywhere in memory: ask for all of them before using
+    // any, so that their cache misses overlap instead of following one another (at 10,000 gas
+    // spheres, a collision re-bounds some 30 pairs; see the README's gas benchmark).
+    for (std::uint32_t index : rebound_scratch) {
+      const PairRuntime& p = pairs[index];
+      for (BodyId id : {p.a, p.b}) {
+        const Body& b = body(id);
+        const char* first = reinterpret_cast<const char*>(&b);
+        __builtin_prefetch(first);
+        __builtin_prefetch(first + 64);
+        __builtin_prefetch(first + 128);
+        __builtin_prefetch(&bodies[id.index]);
+      }
+    }
     for (std::uint32_t index : rebound_scratch) rebound(index, t);
   }
 
