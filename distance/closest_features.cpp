@@ -206,8 +206,10 @@ DistanceResult closest_features(const ShapeGeometry& g1, const Pose& pose1, cons
                       cache.single, max_steps);
   }
   const std::size_t n = pieces1.size() * pieces2.size();
-  if (cache.pieces.size() != n) cache.pieces.assign(n, FeaturePair{});
-  if (cache.piece_results.size() != n) cache.piece_results.assign(n, DistanceResult{});
+  if (!cache.compound) cache.compound = std::make_unique<PairCache::Compound>();
+  PairCache::Compound& compound = *cache.compound;
+  if (compound.pieces.size() != n) compound.pieces.assign(n, FeaturePair{});
+  if (compound.piece_results.size() != n) compound.piece_results.assign(n, DistanceResult{});
   DistanceResult best;
   best.distance = kInfinity;
   int steps = 0;
@@ -216,11 +218,11 @@ DistanceResult closest_features(const ShapeGeometry& g1, const Pose& pose1, cons
     const PosedPiece a = pose_piece(pieces1[i], pose1.x_W, R1);
     for (std::size_t j = 0; j < pieces2.size(); ++j) {
       DistanceResult r = piece_pair(a, pose_piece(pieces2[j], pose2.x_W, R2),
-                                    cache.pieces[i * pieces2.size() + j], max_steps);
+                                    compound.pieces[i * pieces2.size() + j], max_steps);
       steps += r.steps;
       r.piece1 = static_cast<int>(i);
       r.piece2 = static_cast<int>(j);
-      cache.piece_results[i * pieces2.size() + j] = r;
+      compound.piece_results[i * pieces2.size() + j] = r;
       // Failure and penetration dominate; otherwise the smallest distance.
       auto rank = [](ContactStatus s) {
         return s == ContactStatus::kFailed ? 0 : (s == ContactStatus::kPenetrating ? 1 : 2);

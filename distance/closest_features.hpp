@@ -90,11 +90,22 @@ struct DistanceResult {
 };
 
 struct PairCache {
-  FeaturePair single;               // non-compound pairs
-  std::vector<FeaturePair> pieces;  // compound pairs: [piece1 * num_pieces2 + piece2]
-  // Compound pairs: the last query's result for every piece pair (same indexing). The closest
-  // piece alone does not bound when the bodies can touch: another piece may close faster.
-  std::vector<DistanceResult> piece_results;
+  FeaturePair single;  // non-compound pairs
+  struct Compound {
+    std::vector<FeaturePair> pieces;  // [piece1 * num_pieces2 + piece2]
+    // The last query's result for every piece pair (same indexing). The closest piece alone
+    // does not bound when the bodies can touch: another piece may close faster.
+    std::vector<DistanceResult> piece_results;
+  };
+  // Compound pairs only, made at their first query: the cache of a plain pair stays 24 bytes,
+  // so that the scheduler's pair record fits one cache line.
+  std::unique_ptr<Compound> compound;
+
+  // The last query's piece results; empty for a non-compound pair.
+  const std::vector<DistanceResult>& piece_results() const {
+    static const std::vector<DistanceResult> kNone;
+    return compound ? compound->piece_results : kNone;
+  }
 };
 
 // `max_steps` bounds each V-Clip walk (Settings::distance_max_steps; status kFailed beyond it).

@@ -222,7 +222,7 @@ ToiBound time_of_impact(const Body& body1, const BodyState& state1, const ShapeG
                         const Body& body2, const BodyState& state2, const ShapeGeometry& geometry2,
                         const DistanceResult& closest, const PairCache& cache,
                         const Vec3& gravity_W, const Settings& settings) {
-  if (cache.piece_results.empty()) {
+  if (cache.piece_results().empty()) {
     return time_of_impact(body1, state1, geometry1, body2, state2, geometry2, closest, gravity_W,
                           settings);
   }
@@ -234,7 +234,7 @@ ToiBound time_of_impact(const Body& body1, const BodyState& state1, const ShapeG
       toi_motion(body2, state2, geometry2, gravity_W, state1.x_W, geometry1.reach(), settings);
   ToiBound best;
   best.dt = kInfinity;
-  for (const DistanceResult& piece : cache.piece_results) {
+  for (const DistanceResult& piece : cache.piece_results()) {
     const ToiBound b = toi_bound(m1, m2, piece, d_target, settings);
     if (b.dt < best.dt) best = b;
   }

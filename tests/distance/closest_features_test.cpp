@@ -256,7 +256,8 @@ TEST_CASE("compounds pair piece by piece", "[distance][shapes]") {
   CHECK(r.status == ContactStatus::kSeparated);
   CHECK(r.piece2 == 1);
   CHECK(r.distance == Approx(1.0 - 0.4 - 0.4));
-  CHECK(cache.pieces.size() == 2);
+  REQUIRE(cache.compound);
+  CHECK(cache.compound->pieces.size() == 2);
   const DistanceResult left =
       closest_features(*ball_shape.geometry, Pose{Vec3(-1.0, 0, 0.8), Quat::Identity()},
                        *dish.geometry, Pose{}, cache, 100);
