@@ -12,7 +12,9 @@ EventQueue::EventId EventQueue::allocate() {
     free_ids_.pop_back();
     return id;
   }
+  PALPABLE_CHECK(slots_.size() < kNoEvent, "more events queued than ids");
   slots_.emplace_back();
+  if (impl_ == QueueImpl::kBoost) boost_handles_.emplace_back();
   return static_cast<EventId>(slots_.size() - 1);
 }
 
@@ -55,9 +57,9 @@ EventQueue::EventId EventQueue::push(Event event) {
       indexed_.push_back(Entry{event, id});
       sift_up(indexed_.size() - 1);
       break;
-    case QueueImpl::kBoost: slot.handle = heap_.push(Entry{event, id}); break;
+    case QueueImpl::kBoost: boost_handles_[id] = heap_.push(Entry{event, id}); break;
     case QueueImpl::kReference:
-      slot.index = reference_.size();
+      slot.index = static_cast<std::uint32_t>(reference_.size());
       reference_.push_back(Entry{event, id});
       break;
   }
@@ -81,7 +83,7 @@ void EventQueue::update(EventId id, Event event) {
       }
       break;
     }
-    case QueueImpl::kBoost: heap_.update(slot.handle, Entry{event, id}); break;
+    case QueueImpl::kBoost: heap_.update(boost_handles_[id], Entry{event, id}); break;
     case QueueImpl::kReference: reference_[slot.index].event = event; break;
   }
 }
@@ -106,12 +108,12 @@ void EventQueue::erase(EventId id) {
       }
       break;
     }
-    case QueueImpl::kBoost: heap_.erase(slot.handle); break;
+    case QueueImpl::kBoost: heap_.erase(boost_handles_[id]); break;
     case QueueImpl::kReference: {
       // Swap-remove, keeping the moved entry's slot index right.
       const std::size_t i = slot.index;
       reference_[i] = reference_.back();
-      slots_[reference_[i].id].index = i;
+      slots_[reference_[i].id].index = static_cast<std::uint32_t>(i);
       reference_.pop_back();
       break;
     }

@@ -80,8 +80,7 @@ class EventQueue {
   using Heap = boost::heap::d_ary_heap<Entry, boost::heap::arity<4>, boost::heap::mutable_<true>,
                                        boost::heap::compare<PopsAfter>>;
   struct Slot {
-    Heap::handle_type handle{};
-    std::size_t index = 0;  // position in indexed_ or reference_
+    std::uint32_t index = 0;  // position in indexed_ or reference_
     bool live = false;
   };
 
@@ -92,12 +91,13 @@ class EventQueue {
   void sift_down(std::size_t i);
   void place(std::size_t i, const Entry& entry) {
     indexed_[i] = entry;
-    slots_[entry.id].index = i;
+    slots_[entry.id].index = static_cast<std::uint32_t>(i);
   }
 
   QueueImpl impl_;
   std::vector<Entry> indexed_;  // a 4-ary heap: the children of i are 4 i + 1 ... 4 i + 4
   Heap heap_;
+  std::vector<Heap::handle_type> boost_handles_;  // kBoost: per id
   std::vector<Entry> reference_;  // unsorted; pop scans for the minimum
   std::vector<Slot> slots_;
   std::vector<EventId> free_ids_;
