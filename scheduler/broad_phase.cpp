@@ -47,11 +47,62 @@ double cell_index(double x, int level) {
 
 }  // namespace
 
-std::size_t BroadPhase::CellKeyHash::operator()(const CellKey& c) const {
+std::uint64_t BroadPhase::hash(const CellKey& c) {
   std::uint64_t h = static_cast<std::uint64_t>(c.i) * 0x9E3779B97F4A7C15ull;
   h = h * 0xC2B2AE3D27D4EB4Full ^ static_cast<std::uint64_t>(c.j);
   h = h * 0x165667B19E3779F9ull ^ static_cast<std::uint64_t>(c.k);
-  return static_cast<std::size_t>(h ^ (h >> 29));
+  // The SplitMix64 finalizer: the low bits the table uses depend on every bit of the key, so
+  // the cells of a row do not fill neighbouring slots (long probe runs).
+  h = (h ^ (h >> 30)) * 0xBF58476D1CE4E5B9ull;
+  h = (h ^ (h >> 27)) * 0x94D049BB133111EBull;
+  return h ^ (h >> 31);
+}
+
+template <class Value>
+const Value* BroadPhase::CellTable<Value>::find(const CellKey& key) const {
+  if (slots_.empty()) return nullptr;
+  const std::size_t mask = slots_.size() - 1;
+  for (std::size_t i = hash(key) & mask;; i = (i + 1) & mask) {
+    const Slot& slot = slots_[i];
+    if (!slot.used) return nullptr;
+    if (slot.key == key) return &slot.value;
+  }
+}
+
+template <class Value>
+template <class IsEmpty>
+Value& BroadPhase::CellTable<Value>::get(const CellKey& key, IsEmpty is_empty) {
+  if (Value* value = find(key)) return *value;
+  if (2 * (used_ + 1) > slots_.size()) rebuild(is_empty);
+  const std::size_t mask = slots_.size() - 1;
+  std::size_t i = hash(key) & mask;
+  while (slots_[i].used) i = (i + 1) & mask;
+  Slot& slot = slots_[i];
+  slot.key = key;
+  slot.used = true;
+  ++used_;
+  return slot.value;
+}
+
+template <class Value>
+template <class IsEmpty>
+void BroadPhase::CellTable<Value>::rebuild(IsEmpty is_empty) {
+  std::vector<Slot> old;
+  old.swap(slots_);
+  std::size_t live = 0;
+  for (const Slot& slot : old) live += slot.used && !is_empty(slot.value);
+  // At most a quarter full after the rebuild: at least as many insertions again before the next.
+  std::size_t size = 16;
+  while (size < 4 * (live + 1)) size *= 2;
+  slots_.resize(size);
+  used_ = 0;
+  for (Slot& slot : old) {
+    if (!slot.used || is_empty(slot.value)) continue;
+    std::size_t i = hash(slot.key) & (size - 1);
+    while (slots_[i].used) i = (i + 1) & (size - 1);
+    slots_[i] = std::move(slot);
+    ++used_;
+  }
 }
 
 void BroadPhase::set(std::uint32_t id, const Aabb& box) {
@@ -104,13 +155,15 @@ void BroadPhase::remove(std::uint32_t id) {
 }
 
 void BroadPhase::insert_cells(std::uint32_t id) {
+  const auto no_entries = [](const std::vector<CellEntry>& cell) { return cell.empty(); };
+  const auto zero_count = [](std::uint32_t count) { return count == 0; };
   const Item& item = items_[id];
   Level& level = levels_[item.level];
   for (std::int64_t i = item.lo[0]; i <= item.hi[0]; ++i) {
     for (std::int64_t j = item.lo[1]; j <= item.hi[1]; ++j) {
       for (std::int64_t k = item.lo[2]; k <= item.hi[2]; ++k) {
-        level.cells[CellKey{i, j, k}].push_back(CellEntry{item.box, id});
-        ++level.blocks[CellKey{block_of(i), block_of(j), block_of(k)}];
+        level.cells.get(CellKey{i, j, k}, no_entries).push_back(CellEntry{item.box, id});
+        ++level.blocks.get(CellKey{block_of(i), block_of(j), block_of(k)}, zero_count);
       }
     }
   }
@@ -122,13 +175,12 @@ void BroadPhase::erase_cells(std::uint32_t id) {
   for (std::int64_t i = item.lo[0]; i <= item.hi[0]; ++i) {
     for (std::int64_t j = item.lo[1]; j <= item.hi[1]; ++j) {
       for (std::int64_t k = item.lo[2]; k <= item.hi[2]; ++k) {
-        auto it = level.cells.find(CellKey{i, j, k});
-        auto& cell = it->second;
-        cell.erase(std::find_if(cell.begin(), cell.end(),
-                                [id](const CellEntry& e) { return e.id == id; }));
-        if (cell.empty()) level.cells.erase(it);
-        auto block = level.blocks.find(CellKey{block_of(i), block_of(j), block_of(k)});
-        if (--block->second == 0) level.blocks.erase(block);
+        // Swap-remove: the order of a cell's entries does not matter (a query sorts its answer).
+        std::vector<CellEntry>& cell = *level.cells.find(CellKey{i, j, k});
+        *std::find_if(cell.begin(), cell.end(), [id](const CellEntry& e) { return e.id == id; }) =
+            cell.back();
+        cell.pop_back();
+        --*level.blocks.find(CellKey{block_of(i), block_of(j), block_of(k)});
       }
     }
   }
@@ -139,9 +191,9 @@ void BroadPhase::visit_cells(const Level& level, const std::int64_t lo[3], const
   for (std::int64_t i = lo[0]; i <= hi[0]; ++i) {
     for (std::int64_t j = lo[1]; j <= hi[1]; ++j) {
       for (std::int64_t k = lo[2]; k <= hi[2]; ++k) {
-        auto it = level.cells.find(CellKey{i, j, k});
-        if (it == level.cells.end()) continue;
-        for (const CellEntry& e : it->second) test(e.id, e.box, box, self, out);
+        const std::vector<CellEntry>* cell = level.cells.find(CellKey{i, j, k});
+        if (cell == nullptr) continue;
+        for (const CellEntry& e : *cell) test(e.id, e.box, box, self, out);
       }
     }
   }
@@ -194,7 +246,8 @@ void BroadPhase::query(const Aabb& box, std::uint32_t self, std::vector<std::uin
     for (std::int64_t bi = b_lo[0]; bi <= b_hi[0]; ++bi) {
       for (std::int64_t bj = b_lo[1]; bj <= b_hi[1]; ++bj) {
         for (std::int64_t bk = b_lo[2]; bk <= b_hi[2]; ++bk) {
-          if (contents.blocks.find(CellKey{bi, bj, bk}) == contents.blocks.end()) continue;
+          const std::uint32_t* count = contents.blocks.find(CellKey{bi, bj, bk});
+          if (count == nullptr || *count == 0) continue;
           const std::int64_t block[3] = {bi, bj, bk};
           std::int64_t c_lo[3], c_hi[3];
           for (int a = 0; a < 3; ++a) {

@@ -15,12 +15,12 @@
 //
 // Exactness: a query reports exactly the items whose stored box overlaps the query box by
 // Aabb::overlaps — the same answer as testing every item — in ascending id order. Moving an
-// item (set) costs O(1) cells; memory is O(items).
+// item (set) costs O(1) cells; memory is O(items) (cells emptied by moves keep their slot until
+// their level's table is rebuilt, which drops them).
 #include "core/types.hpp"
 
 #include <cstdint>
 #include <map>
-#include <unordered_map>
 #include <vector>
 
 namespace palpable {
@@ -45,8 +45,34 @@ class BroadPhase {
     std::int64_t i, j, k;
     bool operator==(const CellKey& o) const { return i == o.i && j == o.j && k == o.k; }
   };
-  struct CellKeyHash {
-    std::size_t operator()(const CellKey& c) const;
+  static std::uint64_t hash(const CellKey& c);
+  // An open-addressing hash table (linear probing, power-of-two size, at most half full) from a
+  // cell to a value, its slots in one array: a lookup reads one slot, not a bucket, a node and
+  // then the node's value as std::unordered_map does. Slots are never erased one by one: a cell
+  // that empties keeps its slot, and its buffer, so that a box moving to and fro allocates
+  // nothing; the table is rebuilt without its empty cells when it would pass half full.
+  template <class Value>
+  class CellTable {
+   public:
+    const Value* find(const CellKey& key) const;
+    Value* find(const CellKey& key) {
+      return const_cast<Value*>(static_cast<const CellTable&>(*this).find(key));
+    }
+    // The value of `key`, inserted empty (Value{}) if absent. `is_empty(value)` tells which
+    // cells a rebuild may drop. The reference is valid until the next call of get.
+    template <class IsEmpty>
+    Value& get(const CellKey& key, IsEmpty is_empty);
+
+   private:
+    struct Slot {
+      CellKey key{0, 0, 0};
+      bool used = false;
+      Value value{};
+    };
+    template <class IsEmpty>
+    void rebuild(IsEmpty is_empty);
+    std::vector<Slot> slots_;
+    std::size_t used_ = 0;
   };
   struct Item {
     Aabb box;
@@ -64,8 +90,8 @@ class BroadPhase {
   struct Level {
     std::vector<std::uint32_t> items;
     // Each cell holds copies of its items' boxes, so a query reads them in sequence.
-    std::unordered_map<CellKey, std::vector<CellEntry>, CellKeyHash> cells;
-    std::unordered_map<CellKey, std::uint32_t, CellKeyHash> blocks;  // item-cells per block
+    CellTable<std::vector<CellEntry>> cells;
+    CellTable<std::uint32_t> blocks;  // item-cells per block (0: an emptied block)
   };
 
   void insert_cells(std::uint32_t id);
