@@ -504,6 +504,23 @@ struct Simulation::Impl {
     c.body2.r_W = point_W - c.n_W * height - x2_W;
   }
 
+  // Puts the contact at `tip_W`, the point of the patch boundary a body tips about when the
+  // patch cannot carry the torque of the centre-of-pressure impulse (DESIGN.md §4). If the body
+  // turns so fast that this point already separates, the corner landing first takes the
+  // collision: the relative normal velocity is affine over the contact plane, so a patch whose
+  // centre of pressure approaches has a corner that approaches. (A collision at the separating
+  // point does nothing a retry sees: the pair stays approaching at the same instant, again and
+  // again; a microcollision there even pushes the point away at v_micro while the patch's other
+  // end keeps landing.)
+  void place_tipping(Contact& c, const Vec3& tip_W, const BodyState& s1, const BodyState& s2,
+                     const Vec3& x_D) const {
+    place(c, tip_W, s1.x_W, s2.x_W);
+    const Vec3 u_tip = contact_point_velocity_W(c.body1) - contact_point_velocity_W(c.body2);
+    if (!(u_tip.dot(c.n_W) < 0.0)) {
+      place(c, fastest_approaching_corner(c.patch, c.n_W, s1, s2, x_D), s1.x_W, s2.x_W);
+    }
+  }
+
   // The piece-pair result a collision would be resolved at: `dr` itself, or, for a pair with a
   // compound, the piece within the envelope approaching fastest (a ball in a crease touches two
   // pieces; the closest may be the one it is leaving).
@@ -727,10 +744,15 @@ struct Simulation::Impl {
       const bool inside = s_pressure >= 0.0 && s_pressure <= length;
       if (!inside || (depth == 0 && std::abs(lambda) > 1e-12 * (1.0 + length))) {
         // Inside: resolve once more at the centre of pressure (K depends on the point). Outside:
-        // the segment cannot hold that torque and the body tips about the end it reaches.
-        place(c, c.patch[0] + c.segment_dir_W * std::clamp(s_pressure, 0.0, length), b1.state.x_W,
-              b2.state.x_W);
-        if (!inside) c.centre_of_pressure = c.segment = false;
+        // the segment cannot hold that torque and the body tips about the end it reaches, or,
+        // if that end already separates, collides at the end landing first.
+        const Vec3 q = c.patch[0] + c.segment_dir_W * std::clamp(s_pressure, 0.0, length);
+        if (inside) {
+          place(c, q, b1.state.x_W, b2.state.x_W);
+        } else {
+          c.centre_of_pressure = c.segment = false;
+          place_tipping(c, q, b1.state, b2.state, x_D);
+        }
         return resolve(p, c, t, depth + 1);
       }
     } else if (c.centre_of_pressure) {
@@ -740,17 +762,9 @@ struct Simulation::Impl {
       const double pn = p_W.dot(c.n_W);
       pressure = pn != 0.0 ? x_D + p_W * (c.n_W.dot(c.point_W - x_D) / pn) : c.point_W;
       if (!inside_convex_polygon(c.patch, c.n_W, pressure)) {
-        // The patch cannot carry that torque: the body tips about the patch boundary. If the
-        // body turns so fast that the boundary point already separates, the corner landing
-        // first takes the collision (else a zero impulse there leaves the pair approaching at
-        // the same instant, again and again).
+        // The patch cannot carry that torque: the body tips about the patch boundary.
         c.centre_of_pressure = false;
-        place(c, exit_point(c.patch, c.n_W, c.point_W, pressure), b1.state.x_W, b2.state.x_W);
-        const Vec3 u_exit = contact_point_velocity_W(c.body1) - contact_point_velocity_W(c.body2);
-        if (!(u_exit.dot(c.n_W) < 0.0)) {
-          place(c, fastest_approaching_corner(c.patch, c.n_W, b1.state, b2.state, x_D),
-                b1.state.x_W, b2.state.x_W);
-        }
+        place_tipping(c, exit_point(c.patch, c.n_W, c.point_W, pressure), b1.state, b2.state, x_D);
         return resolve(p, c, t, depth + 1);
       }
     }
