@@ -98,7 +98,7 @@ class EventQueue {
   std::vector<Entry> indexed_;  // a 4-ary heap: the children of i are 4 i + 1 ... 4 i + 4
   Heap heap_;
   std::vector<Heap::handle_type> boost_handles_;  // kBoost: per id
-  std::vector<Entry> reference_;  // unsorted; pop scans for the minimum
+  std::vector<Entry> reference_;                  // unsorted; pop scans for the minimum
   std::vector<Slot> slots_;
   std::vector<EventId> free_ids_;
   std::uint64_t next_sequence_ = 0;
