@@ -216,11 +216,11 @@ Material parse_material(const Reader& r, const json& value, const std::string& p
                         const Material& defaults, bool pair) {
   r.object(value, path);
   if (pair) {
-    r.only_keys(value, path, {"bodies", "friction", "restitution", "rolling_resistance",
-                               "spinning_resistance"});
+    r.only_keys(value, path,
+                {"bodies", "friction", "restitution", "rolling_resistance", "spinning_resistance"});
   } else {
-    r.only_keys(value, path, {"friction", "restitution", "rolling_resistance",
-                               "spinning_resistance"});
+    r.only_keys(value, path,
+                {"friction", "restitution", "rolling_resistance", "spinning_resistance"});
   }
   Material m = defaults;
   if (value.contains("friction"))
@@ -246,7 +246,8 @@ void parse_settings(const Reader& r, const json& value, const std::string& path,
   r.object(value, path);
   r.only_keys(value, path,
               {"envelope", "microcollision_speed", "integration_tolerance", "restitution_law",
-               "microcollision_rule", "retry_limit", "centre_of_pressure", "broad_phase_horizon"});
+               "microcollision_rule", "retry_limit", "centre_of_pressure", "broad_phase_horizon",
+               "broad_phase_max_sweep"});
   if (value.contains("centre_of_pressure")) {
     const json& v = value["centre_of_pressure"];
     if (!v.is_boolean()) r.fail_value(path + "/centre_of_pressure", v, "true or false");
@@ -255,6 +256,10 @@ void parse_settings(const Reader& r, const json& value, const std::string& path,
   if (value.contains("broad_phase_horizon")) {
     s.broad_phase_horizon_s =
         r.positive(value["broad_phase_horizon"], path + "/broad_phase_horizon");
+  }
+  if (value.contains("broad_phase_max_sweep")) {
+    s.broad_phase_max_sweep =
+        r.positive(value["broad_phase_max_sweep"], path + "/broad_phase_max_sweep");
   }
   if (value.contains("envelope")) s.envelope_m = r.positive(value["envelope"], path + "/envelope");
   if (value.contains("microcollision_speed")) {

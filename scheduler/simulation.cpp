@@ -179,13 +179,16 @@ struct Simulation::Impl {
 
   // ---------------------------------------------------------------- broad phase
 
-  // Recomputes the swept box of `id` from time t and stores it in the broad phase.
-  void refresh_box(BodyId id, double t) {
-    compute_box(id, t);
+  // Recomputes the swept box of `id` from time t and stores it in the broad phase. With
+  // `limit_sweep`, a dynamic body's horizon is cut to the sweep limit (see refresh_broad_phase);
+  // returns whether that cut it.
+  bool refresh_box(BodyId id, double t, bool limit_sweep = false) {
+    const bool cut = compute_box(id, t, limit_sweep);
     (body(id).is_dynamic() ? dynamic_boxes : static_boxes).set(id.index, bodies[id.index].box);
+    return cut;
   }
 
-  void compute_box(BodyId id, double t) {
+  bool compute_box(BodyId id, double t, bool limit_sweep) {
     BodyRuntime& rt = bodies[id.index];
     const Body& b = body(id);
     const BodyState s = extrapolate(id, t);
@@ -194,7 +197,7 @@ struct Simulation::Impl {
     if (b.motion == MotionKind::kFixed) {
       rt.box = grown(bounding_box_W(*b.shape, s.x_W, s.q_WM), margin);
       rt.horizon = kInfinity;
-      return;
+      return false;
     }
     if (b.motion == MotionKind::kKinematic) {
       const KinematicMotion& k = b.kinematic;
@@ -210,7 +213,7 @@ struct Simulation::Impl {
         rt.box = maps_onto_itself ? grown(bounding_box_W(*b.shape, s.x_W, s.q_WM), margin)
                                   : Aabb{Vec3::Constant(-kInfinity), Vec3::Constant(kInfinity)};
         rt.horizon = kInfinity;
-        return;
+        return false;
       }
       // Every material point stays within |x - c| + reach of the axis point c(t).
       const Vec3 c = k.point_W + k.velocity_W * t;
@@ -219,17 +222,22 @@ struct Simulation::Impl {
       const double dt = translating ? horizon : 0.0;
       rt.box = grown(parabola_box(c, k.velocity_W, Vec3::Zero(), dt), radius + margin);
       rt.horizon = t + horizon;
-      return;
+      return false;
     }
     const Vec3 g = sim.world_.gravity_W;
     if (s.v_W.squaredNorm() == 0.0 && g.squaredNorm() == 0.0) {
       rt.box = grown(parabola_box(s.x_W, s.v_W, g, 0.0), reach + margin);
       rt.horizon = kInfinity;
-      return;
+      return false;
     }
-    const double dt = settings().broad_phase_horizon_s;
+    double dt = settings().broad_phase_horizon_s;
+    const double travel = s.v_W.norm() * dt;
+    const double max_travel = settings().broad_phase_max_sweep * reach;
+    const bool cut = limit_sweep && travel > max_travel;
+    if (cut) dt *= max_travel / travel;
     rt.box = grown(parabola_box(s.x_W, s.v_W, g, dt), reach + margin);
     rt.horizon = t + dt;
+    return cut;
   }
 
   void schedule_horizon(BodyId id) {
@@ -287,18 +295,19 @@ struct Simulation::Impl {
   }
 
   // Every body whose swept box overlaps that of `id` and that may pair with it (at least one of
-  // the two dynamic), ascending, into `out`.
-  void find_overlaps(BodyId id, std::vector<std::uint32_t>& out) {
+  // the two dynamic), ascending, into `out`. Returns how many of them are dynamic.
+  std::size_t find_overlaps(BodyId id, std::vector<std::uint32_t>& out) {
     out.clear();
     const Aabb& box = bodies[id.index].box;
     dynamic_boxes.query(box, id.index, out);
+    const std::size_t dynamic_count = out.size();
     if (body(id).is_dynamic()) {
-      const std::size_t dynamic_count = out.size();
       static_boxes.query(box, id.index, out);
       // Two ascending runs: sorted in place (inplace_merge allocates a buffer on every call).
       if (dynamic_count > 0 && dynamic_count < out.size()) std::sort(out.begin(), out.end());
     }
     sim.stats_.box_tests = dynamic_boxes.box_tests() + static_boxes.box_tests();
+    return dynamic_count;
   }
 
   // Recomputes the swept box of `id` from time t and brings its pairs up to date: pairs whose
@@ -306,10 +315,21 @@ struct Simulation::Impl {
   // the overlapping boxes in O(neighbours); the pairs are created and dropped in ascending order
   // of the other body, so pair order (and with it the event sequence) does not depend on how the
   // overlaps were found. The pairs are not re-bounded here (see refresh_body).
+  //
+  // A dynamic body among other moving bodies looks ahead no further than it travels, at its
+  // present speed, in Settings::broad_phase_max_sweep times its reach: a longer box would pair
+  // it with bodies it cannot reach before its next collision, each pair re-bounded at every one
+  // of its collisions (in a gas that more than halves the cost per collision). A body with no
+  // moving body near even its short box - a projectile in empty space, a ball bouncing alone on
+  // a floor - keeps the whole horizon: shortening it would only add refreshes.
   void refresh_broad_phase(BodyId id, double t) {
-    refresh_box(id, t);
+    bool found = false;  // `overlapping` holds the overlaps of the box stored
+    if (refresh_box(id, t, /*limit_sweep=*/true)) {
+      found = find_overlaps(id, overlapping) > 0;
+      if (!found) refresh_box(id, t, /*limit_sweep=*/false);
+    }
     schedule_horizon(id);
-    find_overlaps(id, overlapping);
+    if (!found) find_overlaps(id, overlapping);
     partners.clear();
     for (std::uint32_t index : bodies[id.index].pairs) {
       const PairRuntime& p = pairs[index];

@@ -34,10 +34,11 @@ struct GasRun {
 // One run: construct and warm up to `warmup_s` of virtual time (untimed: the lattice start relaxes
 // toward a Maxwell distribution of speeds in a few collisions per sphere), then advance in slices
 // of virtual time until `events` more events. Counters are those of the timed part.
-GasRun run_gas(const GasOptions& options, double horizon_s, double warmup_s, std::uint64_t events,
-               double slice_s) {
+GasRun run_gas(const GasOptions& options, double horizon_s, double max_sweep, double warmup_s,
+               std::uint64_t events, double slice_s) {
   World world = make_sphere_gas(options);
   if (horizon_s > 0.0) world.settings.broad_phase_horizon_s = horizon_s;
+  if (max_sweep > 0.0) world.settings.broad_phase_max_sweep = max_sweep;
   Simulation sim(std::move(world), SimulationOptions{});
   sim.run_until(warmup_s, nullptr);
   const SimulationStats before = sim.stats();
@@ -80,6 +81,7 @@ CommandRegistration registration{
       auto repeats = std::make_shared<int>(5);
       auto fraction = std::make_shared<double>(0.1);
       auto horizon = std::make_shared<double>(0.0);
+      auto max_sweep = std::make_shared<double>(0.0);
       auto warmup = std::make_shared<double>(1.0);
       app.add_option("--counts", *counts, "sphere counts (default 100,300,1000,3000,10000)")
           ->delimiter(',');
@@ -95,9 +97,13 @@ CommandRegistration registration{
       app.add_option("--horizon", *horizon,
                      "broad-phase horizon [s] (default: Settings::broad_phase_horizon_s)")
           ->check(finite_range(std::numeric_limits<double>::min(), kLargest));
+      app.add_option("--max-sweep", *max_sweep,
+                     "farthest travel per horizon, in sphere radii (default: "
+                     "Settings::broad_phase_max_sweep; 1e9 for no limit)")
+          ->check(finite_range(std::numeric_limits<double>::min(), kLargest));
       app.add_option("--warmup", *warmup, "untimed virtual time before timing [s] (default 1)")
           ->check(finite_range(0.0, kLargest));
-      return std::function<int()>([counts, events, repeats, fraction, horizon, warmup] {
+      return std::function<int()>([counts, events, repeats, fraction, horizon, max_sweep, warmup] {
         if (counts->empty()) throw InputError("--counts", "expected at least one count");
         double first_us = 0.0, last_us = 0.0, first_cpu_us = 0.0, last_cpu_us = 0.0;
         int first_n = 0, last_n = 0;
@@ -113,7 +119,7 @@ CommandRegistration registration{
           std::vector<double> walls, cpus;
           GasRun run;
           for (int r = 0; r < runs; ++r) {
-            run = run_gas(options, *horizon, *warmup, *events, slice_s);
+            run = run_gas(options, *horizon, *max_sweep, *warmup, *events, slice_s);
             walls.push_back(run.wall_s);
             cpus.push_back(run.cpu_s);
           }

@@ -65,7 +65,9 @@ TEST_CASE("overrides address the scene by JSON pointer", "[scenarios][scene]") {
   palpable::apply_override(doc, "/settings/envelope=1e-5");
   palpable::apply_override(doc, "/settings/restitution_law=poisson");  // bare word: a string
   palpable::apply_override(doc, "/bodies/1/position=[0, 0, 2]");
+  palpable::apply_override(doc, "/settings/broad_phase_max_sweep=4");
   palpable::Scene scene = palpable::scene_from_json(doc, "base.json");
+  CHECK(scene.world.settings.broad_phase_max_sweep == 4.0);
   CHECK(scene.world.pair_materials[0].material.friction == 0.6);
   CHECK(scene.world.settings.envelope_m == 1e-5);
   CHECK(scene.world.settings.restitution_law == palpable::RestitutionLaw::kPoisson);
