@@ -154,6 +154,17 @@ void BroadPhase::remove(std::uint32_t id) {
   --size_;
 }
 
+template <class F>
+void BroadPhase::for_each_block(const Item& item, F f) {
+  for (std::int64_t i = block_of(item.lo[0]); i <= block_of(item.hi[0]); ++i) {
+    for (std::int64_t j = block_of(item.lo[1]); j <= block_of(item.hi[1]); ++j) {
+      for (std::int64_t k = block_of(item.lo[2]); k <= block_of(item.hi[2]); ++k) {
+        f(CellKey{i, j, k});
+      }
+    }
+  }
+}
+
 void BroadPhase::insert_cells(std::uint32_t id) {
   const auto no_entries = [](const std::vector<CellEntry>& cell) { return cell.empty(); };
   const auto zero_count = [](std::uint32_t count) { return count == 0; };
@@ -163,10 +174,10 @@ void BroadPhase::insert_cells(std::uint32_t id) {
     for (std::int64_t j = item.lo[1]; j <= item.hi[1]; ++j) {
       for (std::int64_t k = item.lo[2]; k <= item.hi[2]; ++k) {
         level.cells.get(CellKey{i, j, k}, no_entries).push_back(CellEntry{item.box, id});
-        ++level.blocks.get(CellKey{block_of(i), block_of(j), block_of(k)}, zero_count);
       }
     }
   }
+  for_each_block(item, [&](const CellKey& block) { ++level.blocks.get(block, zero_count); });
 }
 
 void BroadPhase::erase_cells(std::uint32_t id) {
@@ -180,10 +191,10 @@ void BroadPhase::erase_cells(std::uint32_t id) {
         *std::find_if(cell.begin(), cell.end(), [id](const CellEntry& e) { return e.id == id; }) =
             cell.back();
         cell.pop_back();
-        --*level.blocks.find(CellKey{block_of(i), block_of(j), block_of(k)});
       }
     }
   }
+  for_each_block(item, [&](const CellKey& block) { --*level.blocks.find(block); });
 }
 
 void BroadPhase::visit_cells(const Level& level, const std::int64_t lo[3], const std::int64_t hi[3],

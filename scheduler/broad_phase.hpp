@@ -91,9 +91,12 @@ class BroadPhase {
     std::vector<std::uint32_t> items;
     // Each cell holds copies of its items' boxes, so a query reads them in sequence.
     CellTable<std::vector<CellEntry>> cells;
-    CellTable<std::uint32_t> blocks;  // item-cells per block (0: an emptied block)
+    CellTable<std::uint32_t> blocks;  // items with a cell in the block (0: an emptied block)
   };
 
+  // f(block) for every block (8 x 8 x 8 cells) holding a cell of the item: one or two per axis.
+  template <class F>
+  static void for_each_block(const Item& item, F f);
   void insert_cells(std::uint32_t id);
   void erase_cells(std::uint32_t id);
   // Tests item `id`, whose stored box is `stored`, against `box` (once per query).
