@@ -134,6 +134,7 @@ void BroadPhase::set(std::uint32_t id, const Aabb& box) {
   Level& level = levels_[item.level];
   item.list_position = level.items.size();
   level.items.push_back(id);
+  level.bounds.extend(box);
   insert_cells(id);
 }
 
@@ -227,7 +228,7 @@ void BroadPhase::query(const Aabb& box, std::uint32_t self, std::vector<std::uin
   const std::size_t first = out.size();
   const bool finite = finite_box(box);
   for (const auto& [level, contents] : levels_) {
-    if (contents.items.empty()) continue;
+    if (contents.items.empty() || !contents.bounds.overlaps(box)) continue;
     double lo[3], hi[3];
     double cells = 1.0;
     for (int a = 0; a < 3 && finite; ++a) {

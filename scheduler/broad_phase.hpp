@@ -89,6 +89,11 @@ class BroadPhase {
   };
   struct Level {
     std::vector<std::uint32_t> items;
+    // Holds every box ever stored at the level (it only grows): a query far from all of them
+    // skips the level without a lookup. 10,000 idle bodies far away on a level of their own so
+    // cost a gas's queries nothing; without it each query looked up its cells in their table,
+    // a cache miss each (bench idle, gas + fixed cubes: x1.07-1.19 -> x1.00-1.03).
+    Aabb bounds;
     // Each cell holds copies of its items' boxes, so a query reads them in sequence.
     CellTable<std::vector<CellEntry>> cells;
     CellTable<std::uint32_t> blocks;  // items with a cell in the block (0: an emptied block)
