@@ -319,7 +319,7 @@ struct Simulation::Impl {
   // A dynamic body among other moving bodies looks ahead no further than it travels, at its
   // present speed, in Settings::broad_phase_max_sweep times its reach: a longer box would pair
   // it with bodies it cannot reach before its next collision, each pair re-bounded at every one
-  // of its collisions (in a gas that more than halves the cost per collision). A body with no
+  // of its collisions (it halves the cost per collision of a 10,000-sphere gas). A body with no
   // moving body near even its short box - a projectile in empty space, a ball bouncing alone on
   // a floor - keeps the whole horizon: shortening it would only add refreshes.
   void refresh_broad_phase(BodyId id, double t) {
@@ -396,8 +396,8 @@ struct Simulation::Impl {
       }
     });
     // The other bodies of these pairs lie anywhere in memory: ask for all of them before using
-    // any, so that their cache misses overlap instead of following one another (at 10,000 gas
-    // spheres, a collision re-bounds some 30 pairs; see the README's gas benchmark).
+    // any, so that their cache misses overlap instead of following one another (see the
+    // README's gas benchmark: at 10,000 spheres the bodies no longer fit the cache).
     for (std::uint32_t index : rebound_scratch) {
       const PairRuntime& p = pairs[index];
       for (BodyId id : {p.a, p.b}) {
