@@ -74,14 +74,20 @@ template <class IsEmpty>
 Value& BroadPhase::CellTable<Value>::get(const CellKey& key, IsEmpty is_empty) {
   if (Value* value = find(key)) return *value;
   if (2 * (used_ + 1) > slots_.size()) rebuild(is_empty);
-  const std::size_t mask = slots_.size() - 1;
-  std::size_t i = hash(key) & mask;
-  while (slots_[i].used) i = (i + 1) & mask;
-  Slot& slot = slots_[i];
+  Slot& slot = free_slot(key);
   slot.key = key;
   slot.used = true;
   ++used_;
   return slot.value;
+}
+
+template <class Value>
+typename BroadPhase::CellTable<Value>::Slot& BroadPhase::CellTable<Value>::free_slot(
+    const CellKey& key) {
+  const std::size_t mask = slots_.size() - 1;
+  std::size_t i = hash(key) & mask;
+  while (slots_[i].used) i = (i + 1) & mask;
+  return slots_[i];
 }
 
 template <class Value>
@@ -98,9 +104,7 @@ void BroadPhase::CellTable<Value>::rebuild(IsEmpty is_empty) {
   used_ = 0;
   for (Slot& slot : old) {
     if (!slot.used || is_empty(slot.value)) continue;
-    std::size_t i = hash(slot.key) & (size - 1);
-    while (slots_[i].used) i = (i + 1) & (size - 1);
-    slots_[i] = std::move(slot);
+    free_slot(slot.key) = std::move(slot);
     ++used_;
   }
 }

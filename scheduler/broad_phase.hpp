@@ -71,6 +71,8 @@ class BroadPhase {
     };
     template <class IsEmpty>
     void rebuild(IsEmpty is_empty);
+    // The first unused slot on the probe sequence of `key` (the table is never full).
+    Slot& free_slot(const CellKey& key);
     std::vector<Slot> slots_;
     std::size_t used_ = 0;
   };

@@ -47,6 +47,16 @@ void EventQueue::sift_down(std::size_t i) {
   place(i, entry);
 }
 
+void EventQueue::replace_at(std::size_t i, const Entry& entry) {
+  const bool earlier = event_before(entry.event, indexed_[i].event);
+  place(i, entry);
+  if (earlier) {
+    sift_up(i);
+  } else {
+    sift_down(i);
+  }
+}
+
 EventQueue::EventId EventQueue::push(Event event) {
   event.sequence = next_sequence_++;
   EventId id = allocate();
@@ -72,17 +82,7 @@ void EventQueue::update(EventId id, Event event) {
   event.sequence = next_sequence_++;
   Slot& slot = slots_[id];
   switch (impl_) {
-    case QueueImpl::kIndexed: {
-      const std::size_t i = slot.index;
-      const bool earlier = event_before(event, indexed_[i].event);
-      indexed_[i].event = event;
-      if (earlier) {
-        sift_up(i);
-      } else {
-        sift_down(i);
-      }
-      break;
-    }
+    case QueueImpl::kIndexed: replace_at(slot.index, Entry{event, id}); break;
     case QueueImpl::kBoost: heap_.update(boost_handles_[id], Entry{event, id}); break;
     case QueueImpl::kReference: reference_[slot.index].event = event; break;
   }
@@ -97,15 +97,7 @@ void EventQueue::erase(EventId id) {
       const std::size_t i = slot.index;
       const Entry last = indexed_.back();
       indexed_.pop_back();
-      if (i < indexed_.size()) {
-        const bool earlier = event_before(last.event, indexed_[i].event);
-        place(i, last);
-        if (earlier) {
-          sift_up(i);
-        } else {
-          sift_down(i);
-        }
-      }
+      if (i < indexed_.size()) replace_at(i, last);
       break;
     }
     case QueueImpl::kBoost: heap_.erase(boost_handles_[id]); break;

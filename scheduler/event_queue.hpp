@@ -89,6 +89,8 @@ class EventQueue {
   // The indexed heap: moves the entry at position i up or down to its place.
   void sift_up(std::size_t i);
   void sift_down(std::size_t i);
+  // Puts `entry` at position i in place of the entry there, then moves it up or down to its place.
+  void replace_at(std::size_t i, const Entry& entry);
   void place(std::size_t i, const Entry& entry) {
     indexed_[i] = entry;
     slots_[entry.id].index = static_cast<std::uint32_t>(i);
