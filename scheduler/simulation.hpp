@@ -13,12 +13,14 @@
 #include "core/body.hpp"
 #include "core/settings.hpp"
 #include "core/types.hpp"
+#include "scheduler/contact.hpp"
 #include "scheduler/event_queue.hpp"
 #include "scheduler/world.hpp"
 
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <vector>
 
 namespace palpable {
@@ -49,27 +51,6 @@ struct SimulationStats {
   std::uint64_t box_tests = 0;           // swept-box overlap tests made by the broad phase
 };
 
-enum class CollisionKind : std::uint8_t { kCollision, kMicrocollision };
-
-// One resolved collision, in the world frame.
-struct CollisionRecord {
-  double t = 0.0;
-  CollisionKind kind = CollisionKind::kCollision;
-  BodyId a;                       // body 1 of the pair (the lower id)
-  BodyId b;                       // body 2
-  Vec3 p_W = Vec3::Zero();        // contact point [m]
-  Vec3 n_W = Vec3::UnitZ();       // contact normal, from b to a
-  Vec3 impulse_W = Vec3::Zero();  // impulse on a [N s] (b receives the opposite)
-  double approach_speed = 0.0;    // -u_n before the collision [m/s]
-  double energy_change = 0.0;     // kinetic energy of the two bodies after minus before [J]
-  bool centre_of_pressure = false;
-  // Bodies resting on the dynamic body of a microcollision with its support, carried along with
-  // it (their velocity along n set to its); energy_change includes them. impulse_W is the
-  // support's impulse on the whole stack; a rider settling onto the carrier also takes the
-  // plastic impulse that matches its normal velocity to the carrier's, not recorded apart.
-  std::vector<BodyId> carried;
-};
-
 // Receives what a run produces. Default implementations ignore everything.
 class SimulationObserver {
  public:
@@ -84,6 +65,15 @@ struct SimulationOptions {
   QueueImpl queue = QueueImpl::kIndexed;
 };
 
+// What one step did: the event it processed and, for a collision, its record.
+struct StepResult {
+  bool done = false;  // nothing left to do before the time asked for: no event was processed
+  double t = 0.0;     // the event's time [s]
+  EventKind kind = EventKind::kPairCheck;
+  BodyId a, b;                               // the bodies it named (b invalid for one body)
+  std::optional<CollisionRecord> collision;  // the collision it resolved, if any
+};
+
 class Simulation {
  public:
   // Validates the world (throws InputError "/bodies/<i>": ... for bodies that overlap at the
@@ -93,23 +83,21 @@ class Simulation {
   Simulation(const Simulation&) = delete;
   Simulation& operator=(const Simulation&) = delete;
 
+  // Processes the next event if it is due at or before t_end, and says what it did.
+  StepResult step(double t_end, SimulationObserver* observer = nullptr);
   // Runs every event up to and including t_end (samples at k x interval <= t_end).
   // `progress` (optional) is called now and then with the current time.
   void run_until(double t_end, SimulationObserver* observer,
                  const std::function<void(double)>& progress = {});
 
-  const World& world() const { return world_; }
-  const SimulationStats& stats() const { return stats_; }
+  const World& world() const;
+  const SimulationStats& stats() const;
   // Body `id` extrapolated to time t (>= its clock) without committing.
   BodyState state_at(BodyId id, double t) const;
-  double time() const { return now_; }
+  double time() const;
 
  private:
   struct Impl;
-  World world_;
-  SimulationOptions options_;
-  SimulationStats stats_;
-  double now_ = 0.0;
   std::unique_ptr<Impl> impl_;
 };
 

@@ -1,0 +1,510 @@
+#include "scheduler/contact.hpp"
+
+#include "core/ballistic.hpp"
+#include "core/check.hpp"
+#include "impulse/contact_torque.hpp"
+#include "impulse/microcollision.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace palpable {
+
+namespace {
+
+// How steep a contact normal must be to count as support, cos 60 degrees from the vertical.
+constexpr double kSupportCosine = 0.5;
+
+// Is the point q (on the plane of the convex polygon `patch`, counter-clockwise about n) inside?
+bool inside_convex_polygon(const std::vector<Vec3>& patch, const Vec3& n, const Vec3& q) {
+  for (std::size_t i = 0; i < patch.size(); ++i) {
+    const Vec3& p0 = patch[i];
+    const Vec3& p1 = patch[(i + 1) % patch.size()];
+    if ((p1 - p0).cross(q - p0).dot(n) < 0.0) return false;
+  }
+  return true;
+}
+
+// Where the segment from `inside` to `outside` leaves the convex polygon (both on its plane).
+Vec3 exit_point(const std::vector<Vec3>& patch, const Vec3& n, const Vec3& inside,
+                const Vec3& outside) {
+  double s_exit = 1.0;
+  const Vec3 d = outside - inside;
+  for (std::size_t i = 0; i < patch.size(); ++i) {
+    const Vec3& p0 = patch[i];
+    const Vec3& p1 = patch[(i + 1) % patch.size()];
+    // Inward edge normal m: points with m . (x - p0) >= 0 are inside.
+    const Vec3 m = n.cross(p1 - p0);
+    const double f0 = m.dot(inside - p0);
+    const double fd = m.dot(d);
+    if (fd < 0.0) s_exit = std::min(s_exit, std::max(0.0, f0 / -fd));
+  }
+  return inside + s_exit * d;
+}
+
+// The patch point approaching fastest (the corner that lands first); among equals, the one
+// nearest `foot` (the foot of the dynamic body's centre of mass).
+Vec3 fastest_approaching_corner(const std::vector<Vec3>& patch, const Vec3& n_W,
+                                const BodyState& s1, const BodyState& s2, const Vec3& foot) {
+  double best = kInfinity;
+  Vec3 corner = patch.front();
+  for (const Vec3& q : patch) {
+    const double u_n = (point_velocity_W(s1, q) - point_velocity_W(s2, q)).dot(n_W);
+    const double tie = 1e-12 * (1.0 + std::abs(u_n));
+    if (u_n < best - tie ||
+        (std::abs(u_n - best) <= tie && (q - foot).norm() < (corner - foot).norm())) {
+      best = std::min(best, u_n);
+      corner = q;
+    }
+  }
+  return corner;
+}
+
+// Puts the contact at `tip_W`, the point of the patch boundary a body tips about when the patch
+// cannot carry the torque of the centre-of-pressure impulse (DESIGN.md §4). If the body turns so
+// fast that this point already separates, the corner landing first takes the collision: the
+// relative normal velocity is affine over the contact plane, so a patch whose centre of pressure
+// approaches has a corner that approaches. (A collision at the separating point does nothing a
+// retry sees: the pair stays approaching at the same instant, again and again; a microcollision
+// there even pushes the point away at v_micro while the patch's other end keeps landing.)
+void place_tipping(Contact& c, const Vec3& tip_W, const BodyState& s1, const BodyState& s2) {
+  c.placement = Placement::kPoint;
+  place(c, tip_W);
+  const Vec3 u_tip = contact_point_velocity_W(c.body1) - contact_point_velocity_W(c.body2);
+  if (!(u_tip.dot(c.n_W) < 0.0)) {
+    place(c, fastest_approaching_corner(c.patch, c.n_W, s1, s2, c.dynamic_x_W()));
+  }
+}
+
+// The couples a point impulse cannot carry (impulse/contact_torque.hpp), applied after the
+// impulse P_n of a collision: torsional friction about n - over a patch resolved by the
+// centre-of-pressure rule, mu times the mean distance of the patch from the centre of pressure;
+// at a point, the material's spinning resistance - and the material's rolling resistance
+// against the in-plane relative rotation. Changes the angular velocities of cb1 and cb2 (true
+// inertias, not the centre-of-pressure ones); the record's energy change is measured on the
+// bodies and includes what these take out.
+void resist_rotation(const Contact& c, const Material& material, double P_n, const Vec3& pressure_W,
+                     ContactBody& cb1, ContactBody& cb2) {
+  if (!(P_n > 0.0)) return;
+  ContactBody t1 = c.body1, t2 = c.body2;
+  t1.w_W = cb1.w_W;
+  t2.w_W = cb2.w_W;
+  // About n: Coulomb friction over a patch, or the material's spinning resistance at a point
+  // (the patch's mean distance, the costly part, only if there is spin to resist).
+  const bool spins = c.n_W.dot(t1.w_W - t2.w_W) != 0.0;
+  const double torsion_arm =
+      !spins ? 0.0
+      : c.centre_of_pressure()
+          ? material.friction * mean_distance_over_patch(c.patch, c.n_W, pressure_W)
+          : material.spinning_resistance;
+  if (torsion_arm > 0.0) {
+    const AngularImpulse torsion = resisting_angular_impulse(c.n_W, t1, t2, torsion_arm * P_n);
+    apply_angular_impulse(torsion.L_W, t1, t2);
+  }
+  if (material.rolling_resistance > 0.0) {
+    const Vec3 w_rel = t1.w_W - t2.w_W;
+    const Vec3 rolling = w_rel - c.n_W * c.n_W.dot(w_rel);
+    const double rate = rolling.norm();
+    if (rate > 0.0) {
+      const AngularImpulse resistance =
+          resisting_angular_impulse(rolling / rate, t1, t2, material.rolling_resistance * P_n);
+      apply_angular_impulse(resistance.L_W, t1, t2);
+    }
+  }
+  cb1.w_W = t1.w_W;
+  cb2.w_W = t2.w_W;
+}
+
+// Stage 1, effective inertia: the dynamic body of a centre-of-pressure contact as the impulse
+// sees it. Over a face the line of action passes through the centre of mass: no rotation change
+// at all. Over a segment only the rotation about m = n x s is held: the inverse inertia of a body
+// free to turn only about the segment s and the normal n, V (V^T I V)^-1 V^T with V = [s n].
+void constrain_rotation(const Contact& c, ContactBody& cd) {
+  if (c.placement == Placement::kFace) {
+    cd.inv_inertia_W.setZero();
+  } else if (c.placement == Placement::kSegment) {
+    Eigen::Matrix<double, 3, 2> V;
+    V.col(0) = c.segment_dir_W;
+    V.col(1) = c.n_W;
+    const Mat3 I_W = cd.inv_inertia_W.inverse();
+    cd.inv_inertia_W = V * (V.transpose() * I_W * V).inverse() * V.transpose();
+  }
+}
+
+// One pass of stages 1 and 2: the impulse at the contact's present placement.
+struct Pass {
+  ContactBody cb1, cb2;    // the effective bodies (stage 1)
+  Mat3 R_WC;               // contact frame
+  Vec3 u0_c;               // initial relative velocity, contact frame
+  bool micro = false;      // a microcollision
+  CollisionResult result;  // stage 2
+  Vec3 p_W = Vec3::Zero();
+  int steps = 0;        // Runge-Kutta steps (of the failed integration, if it failed)
+  bool failed = false;  // integration failed: the frictionless impulse stands in
+};
+
+Pass impulse_pass(const Contact& c, const ContactSide& side1, const ContactSide& side2,
+                  const Material& material, const Settings& settings, double stack_mass) {
+  Pass pass;
+  CollisionParameters params = collision_parameters(material, settings);
+  params.min_rebound_speed = c.g_n > 0.0 ? c.v_micro : 0.0;
+  pass.R_WC = contact_frame_W(c.n_W);
+  pass.cb1 = c.body1;
+  pass.cb2 = c.body2;
+  ContactBody& cd = c.dynamic1() ? pass.cb1 : pass.cb2;
+  if (c.centre_of_pressure()) constrain_rotation(c, cd);
+  const Mat3& R_WC = pass.R_WC;
+  pass.u0_c =
+      R_WC.transpose() * (contact_point_velocity_W(pass.cb1) - contact_point_velocity_W(pass.cb2));
+  pass.micro = is_microcollision(pass.u0_c.z(), c.v_micro, settings);
+  // A stack carried by the microcollision meets the impulse with its whole mass (riders).
+  if (stack_mass > 0.0) cd.inv_mass = 1.0 / stack_mass;
+  const Mat3 K_c = R_WC.transpose() * collision_matrix_W(pass.cb1, pass.cb2) * R_WC;
+  if (pass.micro) {
+    MicrocollisionContext context;
+    const Vec3 a_c = R_WC.transpose() * c.a_rel_W;
+    context.a_t_c = Vec2(a_c.x(), a_c.y());
+    context.g_n = c.g_n;
+    // The kinematic surface of the pair, if any (its partner is then the dynamic body).
+    const Body* surface = side1.body.motion == MotionKind::kKinematic   ? &side1.body
+                          : side2.body.motion == MotionKind::kKinematic ? &side2.body
+                                                                        : nullptr;
+    const Vec3 surface_w_W = surface ? surface->kinematic.angular_velocity_W : Vec3::Zero();
+    if (c.centre_of_pressure()) {
+      // A face resting on a turning surface sticks to it: what must vanish over the flight is
+      // its displacement on the surface. (A rolling ball's orbit follows its mean slip, which
+      // the first-order target already zeroes; the term made the platter's orbit rate error
+      // 3 times larger.)
+      context.surface_spin = surface_w_W.dot(c.n_W);
+    }
+    pass.result = resolve_microcollision(K_c, pass.u0_c, params, settings.microcollision_rule,
+                                         context, c.v_micro);
+    // On a turning surface the slip rate Omega x (v - V) depends on the velocity the dynamic
+    // body flies with, which is the one after this impulse: aim once more with it.
+    if (surface_w_W.squaredNorm() > 0.0 && c.slip_at_centre() && succeeded(pass.result.status)) {
+      const double inv_mass = c.dynamic1() ? cd.inv_mass : -cd.inv_mass;
+      const Vec3 dv_W = R_WC * pass.result.p_c * inv_mass;  // body 1 gets +p, body 2 -p
+      const Vec3 da_W = surface_w_W.cross(dv_W);
+      const Vec3 a2_c = R_WC.transpose() * (c.a_rel_W + (surface == &side1.body ? da_W : -da_W));
+      context.a_t_c = Vec2(a2_c.x(), a2_c.y());
+      pass.result = resolve_microcollision(K_c, pass.u0_c, params, settings.microcollision_rule,
+                                           context, c.v_micro);
+    }
+  } else {
+    pass.result = integrate_collision(K_c, pass.u0_c, params);
+  }
+  pass.steps = pass.result.steps;
+  if (!succeeded(pass.result.status)) {
+    // Numerical failure: fall back to the frictionless impulse (always defined for an SPD K),
+    // counted. The contact still separates.
+    pass.failed = true;
+    CollisionParameters frictionless = params;
+    frictionless.friction = 0.0;
+    pass.result = integrate_collision(K_c, pass.u0_c, frictionless);
+  }
+  pass.p_W = R_WC * pass.result.p_c;
+  return pass;
+}
+
+// Stage 3, locate the pressure: where the impulse of a centre-of-pressure contact acts, and
+// whether the contact must move (once) before it can be applied.
+struct PressureLocation {
+  Vec3 pressure_W = Vec3::Zero();  // the centre of pressure (the contact point if no rule)
+  bool move = false;               // resolve once more, at the contact moved to `to_W`
+  bool tip = false;                // ... as a tipping point (else along the segment)
+  Vec3 to_W = Vec3::Zero();
+};
+
+PressureLocation locate_pressure(const Contact& c, const Vec3& p_W, bool first_pass) {
+  PressureLocation at;
+  at.pressure_W = c.point_W;
+  const Vec3& x_D = c.dynamic_x_W();
+  if (c.placement == Placement::kSegment) {
+    // Where along the segment must the impulse act so that its torque about m vanishes?
+    const Vec3 m = c.n_W.cross(c.segment_dir_W);
+    const double denominator = c.segment_dir_W.cross(p_W).dot(m);
+    const double lambda =
+        denominator != 0.0 ? -(c.point_W - x_D).cross(p_W).dot(m) / denominator : 0.0;
+    const double s0 = (c.point_W - c.patch[0]).dot(c.segment_dir_W);
+    const double length = (c.patch[1] - c.patch[0]).norm();
+    const double s_pressure = s0 + lambda;
+    const bool inside = s_pressure >= 0.0 && s_pressure <= length;
+    if (!inside || (first_pass && std::abs(lambda) > 1e-12 * (1.0 + length))) {
+      // Inside: resolve once more at the centre of pressure (K depends on the point). Outside:
+      // the segment cannot hold that torque and the body tips about the end it reaches, or,
+      // if that end already separates, collides at the end landing first.
+      at.move = true;
+      at.tip = !inside;
+      at.to_W = c.patch[0] + c.segment_dir_W * std::clamp(s_pressure, 0.0, length);
+    }
+  } else if (c.placement == Placement::kFace) {
+    // Where does the line of action through the centre of mass meet the contact plane?
+    const double pn = p_W.dot(c.n_W);
+    at.pressure_W = pn != 0.0 ? x_D + p_W * (c.n_W.dot(c.point_W - x_D) / pn) : c.point_W;
+    if (!inside_convex_polygon(c.patch, c.n_W, at.pressure_W)) {
+      // The patch cannot carry that torque: the body tips about the patch boundary.
+      at.move = at.tip = true;
+      at.to_W = exit_point(c.patch, c.n_W, c.point_W, at.pressure_W);
+    }
+  }
+  return at;
+}
+
+}  // namespace
+
+void place(Contact& c, const Vec3& point_W) {
+  c.point_W = point_W;
+  const double height = c.n_W.dot(point_W - c.plane2_W);  // above body 2's surface
+  c.body1.r_W = point_W + c.n_W * (c.gap - height) - c.x1_W;
+  c.body2.r_W = point_W - c.n_W * height - c.x2_W;
+}
+
+Placement place_over_patch(Contact& c, const BodyState& s1, const BodyState& s2, const Vec3& foot_W,
+                           const Settings& settings) {
+  const BodyState& sd = c.dynamic1() ? s1 : s2;
+  const BodyState& ss = c.dynamic1() ? s2 : s1;
+  Vec3 centroid = Vec3::Zero();
+  for (const Vec3& q : c.patch) centroid += q;
+  centroid /= static_cast<double>(c.patch.size());
+  double patch_radius = 0.0;
+  for (const Vec3& q : c.patch) patch_radius = std::max(patch_radius, (q - centroid).norm());
+  const Vec3 w_rel = sd.w_W - ss.w_W;
+  const Vec3 w_in = w_rel - c.n_W * c.n_W.dot(w_rel);
+  // The rule applies to a dynamic body on a fixed or kinematic one, touching over a polygon and
+  // not rocking faster than the microcollision speed.
+  const bool one_dynamic = c.dynamic == DynamicSide::kFirst || c.dynamic == DynamicSide::kSecond;
+  const double rocking_limit = std::max(c.v_micro, 1e-9);
+  const Vec3 along = c.patch.size() == 2 ? (c.patch[1] - c.patch[0]).normalized() : Vec3::Zero();
+  if (settings.centre_of_pressure && one_dynamic && c.patch.size() >= 3 &&
+      w_in.norm() * patch_radius <= rocking_limit) {
+    c.point_W = foot_W;
+    return Placement::kFace;
+  }
+  if (settings.centre_of_pressure && one_dynamic && c.patch.size() == 2 && along.allFinite() &&
+      std::abs(w_rel.dot(c.n_W.cross(along))) * patch_radius <= rocking_limit) {
+    // Edge on face: the point of the segment nearest the foot of the centre of mass.
+    c.segment_dir_W = along;
+    const double length = (c.patch[1] - c.patch[0]).norm();
+    c.point_W = c.patch[0] + along * std::clamp((foot_W - c.patch[0]).dot(along), 0.0, length);
+    return Placement::kSegment;
+  }
+  c.point_W = fastest_approaching_corner(c.patch, c.n_W, s1, s2, foot_W);
+  return Placement::kPoint;
+}
+
+Contact make_contact(const ContactSide& side1, const ContactSide& side2, const DistanceResult& dr,
+                     const Settings& settings, const Vec3& gravity_W, bool with_patch) {
+  const Body& b1 = side1.body;
+  const Body& b2 = side2.body;
+  const BodyState& s1 = side1.state;
+  const BodyState& s2 = side2.state;
+  Contact c;
+  c.a = side1.id;
+  c.b = side2.id;
+  c.dynamic = b1.is_dynamic() ? (b2.is_dynamic() ? DynamicSide::kBoth : DynamicSide::kFirst)
+                              : (b2.is_dynamic() ? DynamicSide::kSecond : DynamicSide::kNeither);
+  c.n_W = dr.n_W;
+  c.point_W = 0.5 * (dr.p1_W + dr.p2_W);
+  c.x1_W = s1.x_W;
+  c.x2_W = s2.x_W;
+
+  auto gravity_on = [&](const Body& b) -> Vec3 {
+    return b.is_dynamic() ? gravity_W : Vec3::Zero();
+  };
+  c.g_n = -(gravity_on(b1) - gravity_on(b2)).dot(c.n_W);
+  if (c.dynamic == DynamicSide::kBoth) {
+    // Same gravity on both: use the upper body's weight along n (DESIGN.md §4).
+    c.g_n = std::abs(gravity_W.dot(c.n_W));
+  }
+  c.g_n = std::max(c.g_n, 0.0);
+  c.v_micro = microcollision_speed(settings, c.g_n);
+
+  auto fill = [&](ContactBody& cb, const Body& b, const BodyState& s) {
+    cb.inv_mass = b.mass.inv_mass;
+    cb.inv_inertia_W = b.is_dynamic() ? inverse_inertia_W(b, s.q_WM) : Mat3::Zero();
+    cb.v_W = s.v_W;
+    cb.w_W = s.w_W;
+  };
+  fill(c.body1, b1, s1);
+  fill(c.body2, b2, s2);
+
+  if (with_patch && dr.status != ContactStatus::kPenetrating) {
+    c.patch = contact_patch(side1.geometry, Pose{s1.x_W, s1.q_WM}, side2.geometry,
+                            Pose{s2.x_W, s2.q_WM}, dr, settings.envelope_m);
+  }
+  if (c.patch.size() >= 2) {
+    // Foot of the dynamic body's centre of mass on the contact plane.
+    const Vec3& x_D = c.dynamic1() ? s1.x_W : s2.x_W;
+    const Vec3 foot = x_D - c.n_W * c.n_W.dot(x_D - dr.p2_W);
+    c.placement = place_over_patch(c, s1, s2, foot, settings);
+  }
+  const Body* dynamic_body = c.dynamic1() ? &b1 : (c.dynamic2() ? &b2 : nullptr);
+  if (c.placement == Placement::kPoint && dynamic_body &&
+      std::holds_alternative<Sphere>(*dynamic_body->shape)) {
+    c.placement = Placement::kSphere;
+  }
+  c.gap = c.n_W.dot(dr.p1_W - dr.p2_W);
+  c.plane2_W = dr.p2_W;
+  place(c, c.point_W);
+  c.u_n = (contact_point_velocity_W(c.body1) - contact_point_velocity_W(c.body2)).dot(c.n_W);
+
+  // Rate of change of the slip at the moving contact location over the next flight
+  // (DESIGN.md §4): gravity, the rotational terms of a rotating contact point, and for a
+  // kinematic surface the change of its velocity under the moving location, Omega x (p' - V).
+  const ContactBody& cd = c.dynamic_body();
+  Vec3 location_velocity = Vec3::Zero();
+  if (dynamic_body) {
+    location_velocity = c.slip_at_centre() ? cd.v_W : contact_point_velocity_W(cd);
+  }
+  auto accel = [&](const Body& b, const ContactBody& cb) -> Vec3 {
+    if (b.is_dynamic()) {
+      Vec3 a = gravity_W;
+      if (!c.slip_at_centre()) a += cb.w_W.cross(cb.w_W.cross(cb.r_W));
+      return a;
+    }
+    if (b.motion == MotionKind::kKinematic) {
+      return b.kinematic.angular_velocity_W.cross(location_velocity - b.kinematic.velocity_W);
+    }
+    return Vec3::Zero();
+  };
+  c.a_rel_W = accel(b1, c.body1) - accel(b2, c.body2);
+  return c;
+}
+
+bool approaching(const Contact& c) {
+  // u_n = 0 with gravity pressing the bodies together counts as approaching: a body left at
+  // rest in contact by an e = 0 collision must collide again (DESIGN.md §4). Without it, an
+  // approach within rounding of the bodies' speeds (what an e = 0 collision leaves) is rest.
+  // Two dynamic bodies share gravity, so nothing presses them together at rest: a body resting
+  // on another rides along when the lower one bounces on its support (see carries_riders).
+  if (c.g_n > 0.0 && c.dynamic != DynamicSide::kBoth) return c.u_n <= 1e-9 * c.v_micro;
+  const double scale =
+      contact_point_velocity_W(c.body1).norm() + contact_point_velocity_W(c.body2).norm();
+  return c.u_n < -1e-12 * scale;
+}
+
+double initial_normal_velocity(const Contact& c) {
+  const Mat3 R_WC = contact_frame_W(c.n_W);
+  return (R_WC.transpose() *
+          (contact_point_velocity_W(c.body1) - contact_point_velocity_W(c.body2)))
+      .z();
+}
+
+bool carries_riders(const Contact& c, const Settings& settings, const Vec3& gravity_W) {
+  // A body bouncing on its support carries what rests on it (shock propagation, as in
+  // Guendelman, Bridson & Fedkiw 2003, for the microcollision train): the microcollision acts
+  // on the stack's whole mass and every rider gets the same change of velocity. Otherwise a
+  // light body under a heavy one must pass the heavy one's weight on in its own collisions, a
+  // storm of m_heavy / m_light of them (tests/tools/extremes_test.cpp). Only over a face resting
+  // on its support (the centre-of-pressure rule: the carrier does not turn, so the stack's mass
+  // is all the impulse meets).
+  if (c.placement != Placement::kFace) return false;
+  if (!is_microcollision(initial_normal_velocity(c), c.v_micro, settings)) return false;
+  if (gravity_W.squaredNorm() == 0.0) return false;
+  const Vec3 n_up = c.dynamic1() ? c.n_W : Vec3(-c.n_W);  // from the support up
+  return n_up.dot(-gravity_W.normalized()) > kSupportCosine;
+}
+
+Resolution resolve(Contact c, const ContactSide& side1, const ContactSide& side2,
+                   const Material& material, const Settings& settings,
+                   const std::vector<Rider>& riders, double t) {
+  Resolution out;
+  // Stages 1-3, at most twice over a face (the second pass at the tipping point) and at most
+  // three times over a segment (moved to where its torque vanishes, then tipping if it leaves).
+  double stack_mass = 0.0;
+  if (!riders.empty()) {
+    stack_mass = (c.dynamic1() ? side1 : side2).body.mass.mass;
+    for (const Rider& r : riders) stack_mass += r.body.mass.mass;
+  }
+  Pass pass;
+  PressureLocation at;
+  for (int round = 0;; ++round) {
+    // Riders ride on a face resting on its support; a tipping carrier turns and carries none.
+    if (c.placement != Placement::kFace) stack_mass = 0.0;
+    pass = impulse_pass(c, side1, side2, material, settings, stack_mass);
+    out.integration_steps += pass.steps;
+    if (pass.failed) ++out.impulse_failures;
+    at = locate_pressure(c, pass.p_W, round == 0);
+    if (!at.move) break;
+    if (at.tip) {
+      place_tipping(c, at.to_W, side1.state, side2.state);
+      out.outcome = PressureOutcome::kTipped;
+    } else {
+      place(c, at.to_W);
+      out.outcome = PressureOutcome::kMovedOnSegment;
+    }
+  }
+  if (out.outcome == PressureOutcome::kAtPoint && c.centre_of_pressure()) {
+    out.outcome = PressureOutcome::kWithinPatch;
+  }
+  const bool carried = stack_mass > 0.0;
+
+  // Stage 4, apply and record. The kinetic energy of the dynamic bodies before, for the record:
+  // the integrator's (1/2)(u0 + u').p is that of the impulse at the point it was resolved with,
+  // which the centre-of-pressure rule's modified inertia and its removal of rocking make differ
+  // from what the bodies show (by up to 0.015 J on a 1 kg box at envelope 1e-2).
+  auto kinetic = [](const Body& b, const BodyState& s) {
+    return b.is_dynamic() ? kinetic_energy(b, s) : 0.0;
+  };
+  double kinetic_before = kinetic(side1.body, side1.state) + kinetic(side2.body, side2.state);
+  if (carried) {
+    for (const Rider& r : riders) kinetic_before += kinetic(r.body, r.state);
+  }
+  ContactBody& cb1 = pass.cb1;
+  ContactBody& cb2 = pass.cb2;
+  apply_impulse(pass.p_W, cb1, cb2);
+  if (c.centre_of_pressure()) {
+    // A face resting on a face does not rock: the pressure over the patch takes out the small
+    // in-plane relative rotation (a plastic slap; the spin about n stays free). Over a segment,
+    // only the rotation about m = n x s.
+    ContactBody& cd = c.dynamic1() ? cb1 : cb2;
+    const Vec3 w_rel = c.dynamic1() ? cb1.w_W - cb2.w_W : cb2.w_W - cb1.w_W;
+    if (c.placement == Placement::kSegment) {
+      const Vec3 m = c.n_W.cross(c.segment_dir_W);
+      cd.w_W -= m * m.dot(w_rel);
+    } else {
+      cd.w_W -= w_rel - c.n_W * c.n_W.dot(w_rel);
+    }
+  }
+  resist_rotation(c, material, pass.p_W.dot(c.n_W), at.pressure_W, cb1, cb2);
+  out.v1_W = side1.body.is_dynamic() ? cb1.v_W : side1.state.v_W;
+  out.w1_W = side1.body.is_dynamic() ? cb1.w_W : side1.state.w_W;
+  out.v2_W = side2.body.is_dynamic() ? cb2.v_W : side2.state.v_W;
+  out.w2_W = side2.body.is_dynamic() ? cb2.w_W : side2.state.w_W;
+  PALPABLE_CHECK(
+      out.v1_W.allFinite() && out.w1_W.allFinite() && out.v2_W.allFinite() && out.w2_W.allFinite(),
+      "non-finite velocity after a collision");
+
+  CollisionRecord& record = out.record;
+  record.t = t;
+  record.kind = pass.micro ? CollisionKind::kMicrocollision : CollisionKind::kCollision;
+  record.a = c.a;
+  record.b = c.b;
+  record.p_W = c.point_W;
+  record.n_W = c.n_W;
+  record.impulse_W = pass.p_W;
+  record.approach_speed = -pass.u0_c.z();
+  BodyState after1 = side1.state, after2 = side2.state;
+  after1.v_W = out.v1_W;
+  after1.w_W = out.w1_W;
+  after2.v_W = out.v2_W;
+  after2.w_W = out.w2_W;
+  double kinetic_after = kinetic(side1.body, after1) + kinetic(side2.body, after2);
+  if (carried) {
+    // The riders move on with the carrier along the normal (a plastic merge with the stack,
+    // which the impulse on the stack's mass assumed); they keep their sliding and spin.
+    const Vec3& v_carrier = c.dynamic1() ? out.v1_W : out.v2_W;
+    for (const Rider& r : riders) {
+      BodyState after = r.state;
+      after.v_W += c.n_W * c.n_W.dot(v_carrier - after.v_W);
+      out.rider_v_W.push_back(after.v_W);
+      record.carried.push_back(r.id);
+      kinetic_after += kinetic(r.body, after);
+    }
+  }
+  record.energy_change = kinetic_after - kinetic_before;
+  record.centre_of_pressure = c.centre_of_pressure();
+  return out;
+}
+
+}  // namespace palpable

@@ -1,0 +1,176 @@
+#pragma once
+// The contact model (DESIGN.md §4): what two bodies touching within the envelope are to each
+// other, and what a collision between them does. Values in, values out: the event loop finds the
+// pair's closest features, builds a Contact here, asks whether it approaches, resolves it here,
+// and commits the new velocities this returns. Nothing here reads or changes the simulation's
+// state, so every rule can be tested with hand-built bodies and states.
+//
+// Where the impulse acts (Placement, chosen once per contact by make_contact):
+//  - a point: the closest point, or over a patch the corner approaching fastest;
+//  - a dynamic sphere: its contact point, with its slip taken at its centre's motion;
+//  - a face on a face (a dynamic body on a fixed or kinematic one, touching over a polygon and
+//    not rocking): the centre-of-pressure rule - the impulse's line of action passes through the
+//    centre of mass, so a sliding block does not rock from corner to corner; where that line
+//    leaves the patch the body really tips, about the patch boundary;
+//  - an edge on a face (a segment patch): only the rotation about n x s is held, so a rod or a
+//    coin on its rim still rolls and tips about the segment.
+//
+// A collision is resolved in named stages (resolve): effective inertia (the rule's constraint on
+// rotation) -> impulse (integration over p_z, or a microcollision) -> locate the pressure (at
+// most one move: along a segment to where its torque vanishes, or to the tipping point) -> apply
+// the impulse and the couples a point impulse cannot carry, and record.
+//
+// Frames: world (_W); the contact normal n_W points from body 2 to body 1; body 1 is the pair's
+// lower id. Units SI.
+#include "core/body.hpp"
+#include "core/settings.hpp"
+#include "core/types.hpp"
+#include "distance/closest_features.hpp"
+#include "impulse/collision_integrator.hpp"
+#include "impulse/collision_matrix.hpp"
+
+#include <cstdint>
+#include <vector>
+
+namespace palpable {
+
+enum class CollisionKind : std::uint8_t { kCollision, kMicrocollision };
+
+// One resolved collision, in the world frame.
+struct CollisionRecord {
+  double t = 0.0;
+  CollisionKind kind = CollisionKind::kCollision;
+  BodyId a;                       // body 1 of the pair (the lower id)
+  BodyId b;                       // body 2
+  Vec3 p_W = Vec3::Zero();        // contact point [m]
+  Vec3 n_W = Vec3::UnitZ();       // contact normal, from b to a
+  Vec3 impulse_W = Vec3::Zero();  // impulse on a [N s] (b receives the opposite)
+  double approach_speed = 0.0;    // -u_n before the collision [m/s]
+  double energy_change = 0.0;     // kinetic energy of the two bodies after minus before [J]
+  bool centre_of_pressure = false;
+  // Bodies resting on the dynamic body of a microcollision with its support, carried along with
+  // it (their velocity along n set to its); energy_change includes them. impulse_W is the
+  // support's impulse on the whole stack; a rider settling onto the carrier also takes the
+  // plastic impulse that matches its normal velocity to the carrier's, not recorded apart.
+  std::vector<BodyId> carried;
+};
+
+// Where a contact's impulse acts (see the header comment).
+enum class Placement : std::uint8_t {
+  kPoint,    // the closest point, or the patch corner approaching fastest
+  kSphere,   // a dynamic sphere's contact point; its slip is its centre's motion
+  kFace,     // centre-of-pressure rule over a polygon: line of action through the centre of mass
+  kSegment,  // centre-of-pressure rule over a segment: rotation held about n x s only
+};
+
+// Which of the two bodies is dynamic.
+enum class DynamicSide : std::uint8_t { kNeither, kFirst, kSecond, kBoth };
+
+// One body of a pair as the contact model sees it: its constant data and its state at the
+// contact instant (the loop's committed state, or an extrapolation).
+struct ContactSide {
+  BodyId id;
+  const Body& body;
+  const ShapeGeometry& geometry;
+  const BodyState& state;
+};
+
+// Everything the collision of a pair needs, in the world frame; body 1 = a, body 2 = b.
+struct Contact {
+  BodyId a, b;
+  DynamicSide dynamic = DynamicSide::kNeither;
+  Placement placement = Placement::kPoint;
+  Vec3 point_W = Vec3::Zero();
+  Vec3 n_W = Vec3::UnitZ();
+  ContactBody body1, body2;
+  Vec3 x1_W = Vec3::Zero(), x2_W = Vec3::Zero();  // the centres of mass
+  double u_n = 0.0;                   // relative normal velocity (< 0 approaching) [m/s]
+  double g_n = 0.0;                   // relative normal acceleration toward contact (>= 0) [m/s^2]
+  double v_micro = 0.0;               // microcollision speed of this contact [m/s]
+  Vec3 a_rel_W = Vec3::Zero();        // slip acceleration at the moving contact location [m/s^2]
+  Vec3 segment_dir_W = Vec3::Zero();  // kSegment: unit, along the segment patch
+  // The gap between the bodies along n and a point of body 2's support plane: each body's
+  // velocity is taken where the contact point, moved along n, meets its own surface.
+  double gap = 0.0;
+  Vec3 plane2_W = Vec3::Zero();
+  std::vector<Vec3> patch;  // the contact patch (empty: a point), counter-clockwise about n
+
+  bool slip_at_centre() const {
+    return placement == Placement::kSphere || placement == Placement::kFace ||
+           placement == Placement::kSegment;
+  }
+  bool centre_of_pressure() const {
+    return placement == Placement::kFace || placement == Placement::kSegment;
+  }
+  bool dynamic1() const { return dynamic == DynamicSide::kFirst || dynamic == DynamicSide::kBoth; }
+  bool dynamic2() const { return dynamic == DynamicSide::kSecond || dynamic == DynamicSide::kBoth; }
+  // The single dynamic body of a pair with one (body 1 if both are dynamic).
+  const ContactBody& dynamic_body() const { return dynamic2() && !dynamic1() ? body2 : body1; }
+  ContactBody& dynamic_body() { return dynamic2() && !dynamic1() ? body2 : body1; }
+  const Vec3& dynamic_x_W() const { return dynamic2() && !dynamic1() ? x2_W : x1_W; }
+};
+
+// The contact of the pair (side1, side2) whose closest features are `closest` (states at the
+// same time). `with_patch`: compute the contact patch and the placement over it (a collision);
+// without it the contact is at the closest point (enough to ask whether it approaches).
+Contact make_contact(const ContactSide& side1, const ContactSide& side2,
+                     const DistanceResult& closest, const Settings& settings, const Vec3& gravity_W,
+                     bool with_patch);
+
+// The placement over a patch of at least two points (DESIGN.md §4's centre-of-pressure rule; see
+// the header comment): kFace or kSegment where the rule applies, else the corner landing first.
+// Returns the placement and sets c.point_W (and c.segment_dir_W). `foot_W`: the foot of the
+// dynamic body's centre of mass on the contact plane.
+Placement place_over_patch(Contact& c, const BodyState& s1, const BodyState& s2, const Vec3& foot_W,
+                           const Settings& settings);
+
+// True if the pair collides now: it approaches, or rests with gravity pressing it together
+// (a body left at rest in contact by an e = 0 collision must collide again, DESIGN.md §4).
+bool approaching(const Contact& c);
+
+// Puts the contact at `point_W` (between the bodies, on the normal's line through it): each body's
+// contact offset is to where that line meets its own surface.
+void place(Contact& c, const Vec3& point_W);
+
+// The relative normal velocity of the contact in the contact frame, u0_c.z(), as the resolution
+// computes it: its sign and size decide between a collision and a microcollision.
+double initial_normal_velocity(const Contact& c);
+
+// True if a collision of `c` carries the bodies resting on its dynamic body (riders): a
+// microcollision of a face resting on an upward-facing support.
+bool carries_riders(const Contact& c, const Settings& settings, const Vec3& gravity_W);
+
+// A body resting on the dynamic body of the contact, carried along by its microcollision.
+struct Rider {
+  BodyId id;
+  const Body& body;
+  const BodyState& state;  // at the contact instant
+};
+
+// How the resolution ended (DESIGN.md §4's centre-of-pressure rule).
+enum class PressureOutcome : std::uint8_t {
+  kAtPoint,         // a point impulse (no rule)
+  kWithinPatch,     // the rule's line of action met the patch: resolved there
+  kMovedOnSegment,  // over a segment, moved once to where the impulse's torque vanishes
+  kTipped,          // the line left the patch: resolved at the tipping point (or the corner
+                    // landing first, if that point already separates)
+};
+
+// What a collision does: the new velocities of the two bodies and the riders, and its record.
+struct Resolution {
+  CollisionRecord record;
+  Vec3 v1_W = Vec3::Zero(), w1_W = Vec3::Zero();  // body 1 after (unchanged if not dynamic)
+  Vec3 v2_W = Vec3::Zero(), w2_W = Vec3::Zero();
+  std::vector<Vec3> rider_v_W;  // each rider's velocity after (in the order given)
+  PressureOutcome outcome = PressureOutcome::kAtPoint;
+  int integration_steps = 0;  // Runge-Kutta steps of every pass
+  int impulse_failures = 0;   // passes whose integration failed (the frictionless impulse stood in)
+};
+
+// Resolves the collision of `c` (a contact with its patch, made from side1 and side2) at time t.
+// `riders`: the bodies it carries (non-empty only if carries_riders(c)).
+Resolution resolve(Contact c, const ContactSide& side1, const ContactSide& side2,
+                   const Material& material, const Settings& settings,
+                   const std::vector<Rider>& riders, double t);
+
+}  // namespace palpable
