@@ -40,14 +40,20 @@ void apply_impulse(const Vec3& p_W, ContactBody& body1, ContactBody& body2) {
   body2.w_W -= body2.inv_inertia_W * body2.r_W.cross(p_W);
 }
 
+FrameProblem frame_problem(const ContactBody& body1, const ContactBody& body2, const Mat3& R_WC) {
+  FrameProblem problem;
+  // K is symmetrised in collision_matrix_W; R^T K R keeps that to rounding, which the integrator
+  // accepts (symmetric within 1e-12 of its scale).
+  problem.K_c = R_WC.transpose() * collision_matrix_W(body1, body2) * R_WC;
+  problem.u0_c =
+      R_WC.transpose() * (contact_point_velocity_W(body1) - contact_point_velocity_W(body2));
+  return problem;
+}
+
 CollisionResult resolve_collision(const ContactBody& body1, const ContactBody& body2,
                                   const Mat3& R_WC, const CollisionParameters& params) {
-  const Mat3 K_W = collision_matrix_W(body1, body2);
-  Mat3 K_c = R_WC.transpose() * K_W * R_WC;
-  K_c = 0.5 * (K_c + K_c.transpose());
-  const Vec3 u0_c =
-      R_WC.transpose() * (contact_point_velocity_W(body1) - contact_point_velocity_W(body2));
-  CollisionResult result = integrate_collision(K_c, u0_c, params);
+  const FrameProblem problem = frame_problem(body1, body2, R_WC);
+  CollisionResult result = integrate_collision(problem.K_c, problem.u0_c, params);
   result.p_W = R_WC * result.p_c;
   return result;
 }

@@ -34,9 +34,17 @@ Mat3 contact_frame_W(const Vec3& n_W);
 // Applies p_W to body 1 and -p_W to body 2 (v1 += p/m1, w1 += I1^-1 (r1 x p); body 2 opposite).
 void apply_impulse(const Vec3& p_W, ContactBody& body1, ContactBody& body2);
 
+// The collision of two bodies as the integrator sees it, in the contact frame R_WC (third column
+// the normal from body 2 to body 1): K_c = R^T K R and u0_c = R^T (u1 - u2).
+struct FrameProblem {
+  Mat3 K_c = Mat3::Identity();
+  Vec3 u0_c = Vec3::Zero();
+};
+FrameProblem frame_problem(const ContactBody& body1, const ContactBody& body2, const Mat3& R_WC);
+
 // Resolves the collision of two bodies in the contact frame R_WC (third column the normal from
-// body 2 to body 1): builds K_c = R^T K R and u0_c = R^T (u1 - u2), integrates, and fills
-// result.p_W = R p_c. Does not change the bodies; apply result.p_W with apply_impulse.
+// body 2 to body 1): integrates the frame_problem and fills result.p_W = R p_c. Does not change the
+// bodies; apply result.p_W with apply_impulse.
 CollisionResult resolve_collision(const ContactBody& body1, const ContactBody& body2,
                                   const Mat3& R_WC, const CollisionParameters& params);
 

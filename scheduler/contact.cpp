@@ -154,12 +154,13 @@ Pass impulse_pass(const Contact& c, const ContactSide& side1, const ContactSide&
   ContactBody& cd = c.dynamic1() ? pass.cb1 : pass.cb2;
   if (c.centre_of_pressure()) constrain_rotation(c, cd);
   const Mat3& R_WC = pass.R_WC;
-  pass.u0_c =
-      R_WC.transpose() * (contact_point_velocity_W(pass.cb1) - contact_point_velocity_W(pass.cb2));
-  pass.micro = is_microcollision(pass.u0_c.z(), c.v_micro, settings);
   // A stack carried by the microcollision meets the impulse with its whole mass (riders).
   if (stack_mass > 0.0) cd.inv_mass = 1.0 / stack_mass;
-  const Mat3 K_c = R_WC.transpose() * collision_matrix_W(pass.cb1, pass.cb2) * R_WC;
+  // The same frame problem as impulse/'s resolve_collision (its tests are this path's tests).
+  const FrameProblem problem = frame_problem(pass.cb1, pass.cb2, R_WC);
+  const Mat3& K_c = problem.K_c;
+  pass.u0_c = problem.u0_c;
+  pass.micro = is_microcollision(pass.u0_c.z(), c.v_micro, settings);
   if (pass.micro) {
     MicrocollisionContext context;
     const Vec3 a_c = R_WC.transpose() * c.a_rel_W;
@@ -384,10 +385,7 @@ bool approaching(const Contact& c) {
 }
 
 double initial_normal_velocity(const Contact& c) {
-  const Mat3 R_WC = contact_frame_W(c.n_W);
-  return (R_WC.transpose() *
-          (contact_point_velocity_W(c.body1) - contact_point_velocity_W(c.body2)))
-      .z();
+  return frame_problem(c.body1, c.body2, contact_frame_W(c.n_W)).u0_c.z();
 }
 
 bool carries_riders(const Contact& c, const Settings& settings, const Vec3& gravity_W) {

@@ -2,7 +2,7 @@
 // forms: a coin spinning flat on a table slows at mu m g r_eff / I_n; a solid sphere rolling with
 // rolling resistance d decelerates at 5 d g / (7 r).
 #include "scheduler/simulation.hpp"
-#include "scheduler_test_support.hpp"
+#include "tests/support/test_world.hpp"
 
 #include "core/mass_properties.hpp"
 #include "core/shape.hpp"
@@ -15,10 +15,6 @@
 using namespace palpable;
 
 namespace {
-
-Body table() {
-  return palpable::test::fixed_ground("table");
-}
 
 struct Samples : SimulationObserver {
   std::vector<double> t;
@@ -67,7 +63,7 @@ TEST_CASE("a coin spinning flat on a table slows at mu m g r_eff / I_n and stops
   world.gravity_W = Vec3(0, 0, -g);
   world.default_material = Material{mu, 0.0};
   world.settings.envelope_m = 1e-5;
-  world.add(table());
+  world.add(test::fixed_ground("table"));
   Body coin;
   coin.name = "coin";
   coin.shape = std::make_shared<const Shape>(ConvexPolyhedron::prism(R, half, sides));
@@ -112,7 +108,7 @@ TEST_CASE("a rolling sphere with rolling resistance d decelerates at 5 d g / 7 r
     world.gravity_W = Vec3(0, 0, -g);
     world.default_material = Material{0.3, 0.0, d};
     world.settings.envelope_m = 1e-5;
-    world.add(table());
+    world.add(test::fixed_ground("table"));
     Body ball;
     ball.name = "ball";
     ball.shape = std::make_shared<const Shape>(make_sphere(r));
@@ -154,7 +150,7 @@ TEST_CASE("a sphere spinning about the vertical with spinning resistance s slows
   world.gravity_W = Vec3(0, 0, -g);
   world.default_material = Material{0.3, 0.0, 0.0, s};
   world.settings.envelope_m = 1e-5;
-  world.add(table());
+  world.add(test::fixed_ground("table"));
   Body ball;
   ball.name = "ball";
   ball.shape = std::make_shared<const Shape>(make_sphere(r));

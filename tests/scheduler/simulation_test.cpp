@@ -2,7 +2,7 @@
 // bouncing ball's heights and Zeno guard, a box dropped flat, determinism, and the reference
 // queue giving the identical event sequence.
 #include "scheduler/simulation.hpp"
-#include "scheduler_test_support.hpp"
+#include "tests/support/test_world.hpp"
 
 #include "core/ballistic.hpp"
 #include "core/check.hpp"
@@ -16,36 +16,9 @@
 
 using namespace palpable;
 
-namespace {
-
-Body sphere_body(const std::string& name, double radius, double mass, const Vec3& x,
-                 const Vec3& v = Vec3::Zero()) {
-  Body b;
-  b.name = name;
-  b.shape = std::make_shared<const Shape>(make_sphere(radius));
-  b.mass = mass_properties_from_mass(*b.shape, mass);
-  b.state.x_W = x;
-  b.state.v_W = v;
-  return b;
-}
-
-Body ground() {
-  return palpable::test::fixed_ground("ground");
-}
-
-// Records everything a run produces.
-struct Recorder : SimulationObserver {
-  std::vector<CollisionRecord> collisions;
-  std::vector<std::vector<BodyState>> samples;
-  std::vector<double> times;
-  void on_sample(double t, const std::vector<BodyState>& states) override {
-    times.push_back(t);
-    samples.push_back(states);
-  }
-  void on_collision(const CollisionRecord& r) override { collisions.push_back(r); }
-};
-
-}  // namespace
+using test::fixed_ground;
+using test::Recorder;
+using test::sphere_body;
 
 TEST_CASE("Newton's cradle: the last ball leaves at the striker's speed", "[scheduler]") {
   World world;
@@ -95,7 +68,7 @@ TEST_CASE("a ball bouncing with e = 0.5 matches e^2n h0 and comes to rest", "[sc
   World world;
   world.default_material = Material{0.5, 0.5};
   const double r = 0.1, h0 = 1.0, g = 9.81, e = 0.5;
-  world.add(ground());
+  world.add(fixed_ground());
   world.add(sphere_body("ball", r, 1.0, Vec3(0, 0, r + h0)));
   Simulation sim(world, SimulationOptions{});
   Recorder rec;
@@ -132,7 +105,7 @@ TEST_CASE("a ball bouncing with e = 0.5 matches e^2n h0 and comes to rest", "[sc
 TEST_CASE("a box dropped flat settles without creeping", "[scheduler]") {
   World world;
   world.default_material = Material{0.6, 0.0};
-  world.add(ground());
+  world.add(fixed_ground());
   Body box;
   box.name = "box";
   box.shape = std::make_shared<const Shape>(ConvexPolyhedron::box(Vec3(0.2, 0.1, 0.05)));
@@ -158,7 +131,7 @@ namespace {
 std::string run_to_text(QueueImpl queue) {
   World world;
   world.default_material = Material{0.3, 0.6};
-  world.add(ground());
+  world.add(fixed_ground());
   world.add(sphere_body("a", 0.1, 1.0, Vec3(0, 0, 0.5), Vec3(0.3, 0.1, 0)));
   world.add(sphere_body("b", 0.15, 2.0, Vec3(0.5, 0.05, 0.8), Vec3(-0.4, 0, 0)));
   Body box;
@@ -205,7 +178,7 @@ TEST_CASE("the Boost and reference queues give the identical event sequence",
 
 TEST_CASE("bodies overlapping at the start are rejected naming them", "[scheduler]") {
   World world;
-  world.add(ground());
+  world.add(fixed_ground());
   world.add(sphere_body("a", 0.1, 1.0, Vec3(0, 0, 0.05)));
   CHECK_THROWS_WITH(Simulation(world, SimulationOptions{}),
                     Catch::Contains("/bodies/1") && Catch::Contains("overlaps"));
@@ -217,7 +190,7 @@ World sliding_edge_world(bool centre_of_pressure) {
   World world;
   world.default_material = Material{0.4, 0.0};
   world.settings.centre_of_pressure = centre_of_pressure;
-  world.add(ground());
+  world.add(fixed_ground());
   Body rod;
   rod.name = "rod";
   const double r = 0.05;
@@ -296,7 +269,7 @@ TEST_CASE("a ball sliding on a compound's floor into its wall bounces off the wa
 World tall_block_world(const Vec3& v_W, const Vec3& w_W) {
   World world;
   world.default_material = Material{0.5, 0.0};
-  world.add(ground());
+  world.add(fixed_ground());
   Body block;
   block.name = "block";
   block.shape = std::make_shared<const Shape>(ConvexPolyhedron::box(Vec3(0.02, 0.02, 0.2)));
@@ -351,7 +324,7 @@ TEST_CASE("a stack of three boxes, 1, 10 and 100 kg from the bottom, rests witho
   // second, instead of the light box passing the heavy ones' weight on in its own collisions.
   World world;
   world.default_material = Material{0.5, 0.3};
-  world.add(ground());
+  world.add(fixed_ground());
   const double masses[] = {1.0, 10.0, 100.0};
   for (int i = 0; i < 3; ++i) {
     Body box;
@@ -420,7 +393,7 @@ TEST_CASE("a pin rocking on its base rim collides at the landing end, not the ri
   World world;
   world.default_material = Material{0.2, 0.3};  // pin-lane
   world.settings.envelope_m = 1e-3;
-  world.add(ground());
+  world.add(fixed_ground());
   Body pin = bowling_pin();
   pin.state.x_W = Vec3(21.157468708906698, 0.31410874578977271, 0.056713205671456643);
   pin.state.q_WM =
@@ -443,4 +416,45 @@ TEST_CASE("a pin rocking on its base rim collides at the landing end, not the ri
   CHECK(first.p_W.y() == Approx(0.17509946093699646).margin(1e-9));
   CHECK(first.approach_speed == Approx(0.17870860083749873).epsilon(1e-9));
   CHECK(first.kind == CollisionKind::kCollision);
+}
+
+TEST_CASE("step: one event at a time, the same run as run_until", "[scheduler][step]") {
+  // A ball dropped 1 m onto the ground, sampled every 0.1 s: the first events are the samples
+  // before the impact, then the impact itself at the closed-form instant (gap envelope / 2).
+  World world;
+  world.default_material = Material{0.5, 0.5};
+  world.add(fixed_ground());
+  world.add(sphere_body("ball", 0.1, 1.0, Vec3(0, 0, 1.1)));
+  const double g = 9.81, h = 1.0 - 0.5 * world.settings.envelope_m;
+  const double t_impact = std::sqrt(2.0 * h / g);
+
+  Simulation stepped(world, SimulationOptions{0.1});
+  Recorder by_step;
+  StepResult first_collision;
+  int samples_before = 0;
+  for (StepResult s = stepped.step(2.0, &by_step); !s.done; s = stepped.step(2.0, &by_step)) {
+    CHECK(s.t == stepped.time());
+    if (s.collision && !first_collision.collision) first_collision = s;
+    if (!first_collision.collision && s.kind == EventKind::kSample) ++samples_before;
+  }
+  REQUIRE(first_collision.collision);
+  CHECK(first_collision.kind == EventKind::kPairCheck);
+  CHECK(first_collision.a == BodyId{0});
+  CHECK(first_collision.b == BodyId{1});
+  CHECK(first_collision.t == Approx(t_impact).epsilon(1e-12));
+  CHECK(first_collision.collision->t == first_collision.t);
+  CHECK(first_collision.collision->kind == CollisionKind::kCollision);
+  CHECK(samples_before == 5);  // t = 0, 0.1, ..., 0.4 < 0.4515 s
+  // Past t_end nothing happens.
+  CHECK(stepped.step(2.0, &by_step).done);
+
+  Simulation whole(world, SimulationOptions{0.1});
+  Recorder by_run;
+  whole.run_until(2.0, &by_run);
+  CHECK(whole.stats().events == stepped.stats().events);
+  REQUIRE(by_run.collisions.size() == by_step.collisions.size());
+  for (std::size_t i = 0; i < by_run.collisions.size(); ++i) {
+    CHECK(by_run.collisions[i].t == by_step.collisions[i].t);
+    CHECK(by_run.collisions[i].impulse_W == by_step.collisions[i].impulse_W);
+  }
 }

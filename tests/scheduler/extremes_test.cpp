@@ -13,16 +13,15 @@
 //    rebound is raised to v_micro, so the normal work is (1/2)(v_micro - u) p_n <= (1/2) v_micro
 //    |p|); and the total mechanical energy never above the start plus that floor (each resting
 //    body re-lifted by up to two envelopes) and rounding;
-//  - or, outside what can be simulated, an InputError naming the JSON path before anything runs.
+// What cannot be simulated is rejected before anything runs: tests/scenarios/scene_limits_test.cpp.
 #include "core/ballistic.hpp"
 #include "core/check.hpp"
 #include "core/mass_properties.hpp"
 #include "core/shape.hpp"
-#include "scenarios/scene.hpp"
 #include "scheduler/simulation.hpp"
+#include "tests/support/test_world.hpp"
 
 #include <catch2/catch.hpp>
-#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -40,49 +39,13 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kG = 9.81;
 
-Body dynamic_body(const std::string& name, const Shape& shape, double mass, const Vec3& x,
-                  const Quat& q = Quat::Identity(), const Vec3& v = Vec3::Zero(),
-                  const Vec3& w = Vec3::Zero()) {
-  Body b;
-  b.name = name;
-  b.shape = std::make_shared<const Shape>(shape);
-  b.mass = mass_properties_from_mass(*b.shape, mass);
-  b.state.x_W = x;
-  b.state.q_WM = q;
-  b.state.v_W = v;
-  b.state.w_W = w;
-  return b;
-}
-
-Body sphere_body(const std::string& name, double radius, double mass, const Vec3& x,
-                 const Vec3& v = Vec3::Zero(), const Vec3& w = Vec3::Zero()) {
-  return dynamic_body(name, make_sphere(radius), mass, x, Quat::Identity(), v, w);
-}
-
-Body box_body(const std::string& name, const Vec3& half, double mass, const Vec3& x,
-              const Quat& q = Quat::Identity(), const Vec3& v = Vec3::Zero(),
-              const Vec3& w = Vec3::Zero()) {
-  return dynamic_body(name, ConvexPolyhedron::box(half), mass, x, q, v, w);
-}
-
-Body fixed_body(const std::string& name, const Shape& shape, const Vec3& x = Vec3::Zero(),
-                const Quat& q = Quat::Identity()) {
-  Body b;
-  b.name = name;
-  b.motion = MotionKind::kFixed;
-  b.shape = std::make_shared<const Shape>(shape);
-  b.mass = infinite_mass_properties();
-  b.state.x_W = x;
-  b.state.q_WM = q;
-  return b;
-}
-
+using test::about;
+using test::box_body;
+using test::dynamic_body;
+using test::fixed_body;
+using test::sphere_body;
 Body ground() {
-  return fixed_body("ground", make_halfspace(Vec3::UnitZ(), 0.0));
-}
-
-Quat about(const Vec3& axis, double angle) {
-  return Quat(Eigen::AngleAxisd(angle, axis.normalized()));
+  return test::fixed_ground();
 }
 
 // ------------------------------------------------------------------ the penetration oracle
@@ -900,60 +863,6 @@ TEST_CASE("a box resting on a kinematic rotating platter does not creep",
   const Outcome out = run(spec);
   const PlatterFigures f = platter_figures(spec, out);
   CHECK(f.creep < 10.0 * spec.world.settings.envelope_m);
-}
-
-// ==================================================================== outside what can run
-
-TEST_CASE("inputs outside what can be simulated are rejected naming the JSON path",
-          "[extremes][input]") {
-  const nlohmann::json base = nlohmann::json::parse(R"({
-    "format": "palpable-scene/1", "end_time": 1.0,
-    "settings": { "envelope": 1e-4 },
-    "materials": { "default": { "friction": 0.5, "restitution": 0.5 } },
-    "bodies": [
-      { "name": "ground", "motion": "fixed",
-        "shape": { "type": "halfspace", "normal": [0, 0, 1], "offset": 0 } },
-      { "name": "ball", "mass": 1.0, "shape": { "type": "sphere", "radius": 0.1 },
-        "position": [0, 0, 0.5], "velocity": [0, 0, 0] } ] })");
-  REQUIRE_NOTHROW(scene_from_json(base, "x.json"));
-  struct Bad {
-    std::string pointer;
-    nlohmann::json value;
-    std::string named;  // the path the error must name
-  };
-  const std::vector<Bad> bad = {
-      {"/materials/default/restitution", 1.5, ""},  // e > 1 creates energy
-      {"/materials/default/friction", -1.0, ""},
-      {"/settings/envelope", 0.0, ""},
-      {"/settings/envelope", -1e-9, ""},
-      {"/bodies/1/mass", 0.0, ""},
-      {"/bodies/1/shape/radius", 0.0, ""},
-      {"/bodies/1/velocity/0", "fast", ""},
-      // Into the ground: found by the Simulation's start check, which names the body.
-      {"/bodies/1/position", nlohmann::json::array({0, 0, -0.05}), "/bodies/1"},
-  };
-  for (const Bad& b : bad) {
-    CAPTURE(b.pointer, b.value.dump());
-    nlohmann::json doc = base;
-    doc[nlohmann::json::json_pointer(b.pointer)] = b.value;
-    bool threw = false;
-    try {
-      const Scene scene = scene_from_json(doc, "x.json");
-      Simulation sim(scene.world, SimulationOptions{});  // overlap is checked here, before a run
-    } catch (const InputError& e) {
-      threw = true;
-      INFO(e.what());
-      const std::string named = b.named.empty() ? b.pointer : b.named;
-      CHECK(std::string(e.what()).find(named) != std::string::npos);
-    }
-    CHECK(threw);
-  }
-  // Non-finite states from a program (JSON cannot hold them).
-  World world;
-  world.add(ground());
-  world.add(sphere_body("ball", 0.1, 1.0, Vec3(0, 0, 0.5),
-                        Vec3(std::numeric_limits<double>::infinity(), 0, 0)));
-  CHECK_THROWS_WITH(Simulation(world, SimulationOptions{}), Catch::Contains("/bodies/1"));
 }
 
 namespace {

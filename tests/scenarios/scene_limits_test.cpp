@@ -1,0 +1,68 @@
+// Inputs outside what can be simulated (issue 7, "The extremes"): an InputError naming the JSON
+// path before anything runs - e > 1, mu < 0, a zero or negative envelope, mass or radius, a
+// non-numeric velocity, a body placed into the ground, non-finite states from a program.
+#include "core/check.hpp"
+#include "scenarios/scene.hpp"
+#include "scheduler/simulation.hpp"
+#include "tests/support/test_world.hpp"
+
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include <limits>
+#include <string>
+#include <vector>
+
+using namespace palpable;
+
+TEST_CASE("inputs outside what can be simulated are rejected naming the JSON path",
+          "[extremes][input]") {
+  const nlohmann::json base = nlohmann::json::parse(R"({
+    "format": "palpable-scene/1", "end_time": 1.0,
+    "settings": { "envelope": 1e-4 },
+    "materials": { "default": { "friction": 0.5, "restitution": 0.5 } },
+    "bodies": [
+      { "name": "ground", "motion": "fixed",
+        "shape": { "type": "halfspace", "normal": [0, 0, 1], "offset": 0 } },
+      { "name": "ball", "mass": 1.0, "shape": { "type": "sphere", "radius": 0.1 },
+        "position": [0, 0, 0.5], "velocity": [0, 0, 0] } ] })");
+  REQUIRE_NOTHROW(scene_from_json(base, "x.json"));
+  struct Bad {
+    std::string pointer;
+    nlohmann::json value;
+    std::string named;  // the path the error must name
+  };
+  const std::vector<Bad> bad = {
+      {"/materials/default/restitution", 1.5, ""},  // e > 1 creates energy
+      {"/materials/default/friction", -1.0, ""},
+      {"/settings/envelope", 0.0, ""},
+      {"/settings/envelope", -1e-9, ""},
+      {"/bodies/1/mass", 0.0, ""},
+      {"/bodies/1/shape/radius", 0.0, ""},
+      {"/bodies/1/velocity/0", "fast", ""},
+      // Into the ground: found by the Simulation's start check, which names the body.
+      {"/bodies/1/position", nlohmann::json::array({0, 0, -0.05}), "/bodies/1"},
+  };
+  for (const Bad& b : bad) {
+    CAPTURE(b.pointer, b.value.dump());
+    nlohmann::json doc = base;
+    doc[nlohmann::json::json_pointer(b.pointer)] = b.value;
+    bool threw = false;
+    try {
+      const Scene scene = scene_from_json(doc, "x.json");
+      Simulation sim(scene.world, SimulationOptions{});  // overlap is checked here, before a run
+    } catch (const InputError& e) {
+      threw = true;
+      INFO(e.what());
+      const std::string named = b.named.empty() ? b.pointer : b.named;
+      CHECK(std::string(e.what()).find(named) != std::string::npos);
+    }
+    CHECK(threw);
+  }
+  // Non-finite states from a program (JSON cannot hold them).
+  World world;
+  world.add(test::fixed_ground());
+  world.add(test::sphere_body("ball", 0.1, 1.0, Vec3(0, 0, 0.5),
+                              Vec3(std::numeric_limits<double>::infinity(), 0, 0)));
+  CHECK_THROWS_WITH(Simulation(world, SimulationOptions{}), Catch::Contains("/bodies/1"));
+}
