@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 namespace palpable {
 
@@ -502,6 +503,26 @@ Resolution resolve(Contact c, const ContactSide& side1, const ContactSide& side2
   }
   record.energy_change = kinetic_after - kinetic_before;
   record.centre_of_pressure = c.centre_of_pressure();
+
+  const double p_norm = pass.p_W.norm();
+  out.energy_allowance = settings.integration_tolerance * p_norm * std::abs(pass.u0_c.z());
+  if (c.g_n > 0.0) {
+    const double slack = 1.0 + settings.microcollision_speed_slack;
+    const double m_red = 1.0 / (c.body1.inv_mass + c.body2.inv_mass);
+    const Vec3 u_after = pass.result.u_final_c;
+    out.energy_allowance += std::max(0.5 * p_norm * c.v_micro * slack,
+                                     0.5 * m_red * u_after.squaredNorm() * slack * slack);
+  }
+  // Rounding of the energies themselves (each about the bodies' kinetic energy).
+  out.energy_allowance += 1e-12 * (kinetic_before + kinetic_after);
+  // A moving (kinematic) body does work on what it hits (a paddle, a platter): not checked.
+  [[maybe_unused]] const bool driven =
+      side1.body.motion == MotionKind::kKinematic || side2.body.motion == MotionKind::kKinematic;
+  PALPABLE_DCHECK(settings.restitution_law == RestitutionLaw::kNewton || driven ||
+                      record.energy_change <= out.energy_allowance,
+                  "a collision created energy: " + std::to_string(record.energy_change) +
+                      " J > allowance " + std::to_string(out.energy_allowance) +
+                      " J at t = " + std::to_string(t));
   return out;
 }
 

@@ -163,6 +163,15 @@ struct Resolution {
   Vec3 v2_W = Vec3::Zero(), w2_W = Vec3::Zero();
   std::vector<Vec3> rider_v_W;  // each rider's velocity after (in the order given)
   PressureOutcome outcome = PressureOutcome::kAtPoint;
+  // The most kinetic energy this collision may create [J] (DESIGN.md §5 step 6): the integration
+  // tolerance times its energy scale |p| |u_n|, plus, when gravity presses the contact, what the
+  // microcollision rebound floor lends - the larger of (1/2) |p| v_micro (the normal floor's
+  // extra work) and (1/2) m_red |u'|^2 (an impulse aimed at a target relative velocity u', the
+  // drift-free rule: p = K^-1 (u' - u0) changes the energy by at most that, as K >= 1 / m_red).
+  // A checked build (PALPABLE_CHECKED) fails on a collision under Stronge or Poisson that
+  // exceeds it; Newton's law can create energy (Kane's paradox) and a kinematic body does work
+  // on what it hits (a platter, a paddle): neither is checked.
+  double energy_allowance = 0.0;
   int integration_steps = 0;  // Runge-Kutta steps of every pass
   int impulse_failures = 0;   // passes whose integration failed (the frictionless impulse stood in)
 };

@@ -100,6 +100,12 @@ struct Simulation::Impl {
                          Pose{s2.x_W, s2.q_WM}, p.cache, settings().distance_max_steps);
     stats.feature_steps += static_cast<std::uint64_t>(dr.steps);
     if (dr.status == ContactStatus::kPenetrating) ++stats.penetrations;
+    // DESIGN.md §5 step 6: no penetration deeper than the envelope (a polyhedron pair's depth is
+    // unknown here: any overlap of one fails).
+    PALPABLE_DCHECK(dr.status != ContactStatus::kPenetrating ||
+                        dr.penetration_depth <= settings().envelope_m,
+                    "bodies " + body(p.a).name + " and " + body(p.b).name + " overlap at t = " +
+                        std::to_string(now));
     return dr;
   }
 

@@ -1,0 +1,81 @@
+// Determinism (after Box2D's determinism test): every shipped scene, run to its end, must reach
+// the committed hash of its final state - every body's position, orientation and velocities, bit
+// for bit, and the number of events. A change of behaviour, intended or not, fails here: an
+// intended one updates the table below in the same commit and says in its message what changed
+// and why. PALPABLE_PRINT_HASHES=1 prints the table as it is now.
+#include "scenarios/scene.hpp"
+#include "scheduler/simulation.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+
+using namespace palpable;
+
+namespace {
+
+// FNV-1a over bytes.
+void mix(std::uint64_t& h, const void* data, std::size_t size) {
+  const auto* bytes = static_cast<const unsigned char*>(data);
+  for (std::size_t i = 0; i < size; ++i) {
+    h ^= bytes[i];
+    h *= 0x100000001b3ull;
+  }
+}
+void mix(std::uint64_t& h, double x) {
+  mix(h, &x, sizeof x);
+}
+
+std::uint64_t final_state_hash(const std::string& scene_file) {
+  const Scene scene = scene_from_json(
+      read_json_file(std::string(PALPABLE_SOURCE_DIR) + "/scenarios/" + scene_file), scene_file);
+  Simulation sim(scene.world, SimulationOptions{scene.output_interval});
+  sim.run_until(scene.end_time, nullptr);
+  std::uint64_t h = 0xcbf29ce484222325ull;
+  for (std::uint32_t i = 0; i < sim.world().bodies.size(); ++i) {
+    const BodyState s = sim.state_at(BodyId{i}, scene.end_time);
+    for (int k = 0; k < 3; ++k) mix(h, s.x_W[k]);
+    for (int k = 0; k < 4; ++k) mix(h, s.q_WM.coeffs()[k]);
+    for (int k = 0; k < 3; ++k) mix(h, s.v_W[k]);
+    for (int k = 0; k < 3; ++k) mix(h, s.w_W[k]);
+  }
+  const std::uint64_t events = sim.stats().events;
+  mix(h, &events, sizeof events);
+  return h;
+}
+
+struct Expected {
+  const char* scene;
+  std::uint64_t hash;
+};
+
+// The committed final-state hashes of the shipped scenes.
+const Expected kExpected[] = {
+    {"ball_on_platter.json", 0xa52035a6782bfdb0ull},
+    {"balls_in_dish.json", 0x32a8e3605d4b6552ull},
+    {"block_on_ramp_accelerating.json", 0x4972afac4af444eaull},
+    {"block_on_ramp_decelerating.json", 0x6459c58004f54f57ull},
+    {"bowling.json", 0xd9545ee0c1e7a162ull},
+    {"chain_of_balls.json", 0x2f767b4f88f40517ull},
+    {"coins.json", 0x5d88e655d1501271ull},
+    {"pool_break.json", 0x555ee332e910483dull},
+    {"sphere_slide_to_roll.json", 0x8d0cc90c21d15ce4ull},
+};
+
+}  // namespace
+
+TEST_CASE("every shipped scene reaches its committed final-state hash",
+          "[scenarios][determinism]") {
+  const bool print = std::getenv("PALPABLE_PRINT_HASHES") != nullptr;
+  for (const Expected& e : kExpected) {
+    CAPTURE(e.scene);
+    const std::uint64_t h = final_state_hash(e.scene);
+    if (print)
+      std::printf("    {\"%s\", 0x%016llxull},\n", e.scene, static_cast<unsigned long long>(h));
+    CHECK(h == e.hash);
+  }
+}
