@@ -19,4 +19,12 @@ std::string_view to_string(MicrocollisionRule rule) {
   return "unknown";
 }
 
+std::string_view to_string(ContactModel model) {
+  switch (model) {
+    case ContactModel::kPersistent: return "persistent";
+    case ContactModel::kMicrocollisions: return "microcollisions";
+  }
+  return "unknown";
+}
+
 }  // namespace palpable

@@ -21,8 +21,17 @@ enum class MicrocollisionRule {
   kReversal,   // Mirtich's rule: reverse the relative velocity (u' = -u0, with the rebound floor)
 };
 
+// How contact that persists is simulated (DESIGN.md §8).
+enum class ContactModel {
+  kPersistent,       // held as a constraint between events (scheduler/island.hpp); impacts stay
+                     // collisions, and an impact ending slower than the microcollision speed hands
+                     // its contact over to the hold
+  kMicrocollisions,  // Mirtich's trains of microcollisions (DESIGN.md §4), kept for comparison
+};
+
 std::string_view to_string(RestitutionLaw law);
 std::string_view to_string(MicrocollisionRule rule);
+std::string_view to_string(ContactModel model);
 
 // Contact material of a pair of bodies.
 struct Material {
@@ -56,6 +65,14 @@ struct Settings {
 
   RestitutionLaw restitution_law = RestitutionLaw::kStronge;
   MicrocollisionRule microcollision_rule = MicrocollisionRule::kDriftFree;
+
+  // Contact that persists: held between events, or trains of microcollisions.
+  ContactModel contact_model = ContactModel::kMicrocollisions;
+
+  // Relative speed below which a held contact counts as still [m/s]: its friction sticks (or is
+  // tested for sticking), and an island of still bodies on fixed supports in equilibrium is at
+  // rest. Slip that stops at an event is zero to rounding; this only absorbs that rounding.
+  double still_speed_mps = 1e-9;
 
   // Relative coplanarity tolerance of convex hulls built from points [-], times the diagonal of
   // the points' bounding box: hull facets whose planes agree within it become one polygon face,

@@ -1,5 +1,7 @@
 #include "distance/closest_features.hpp"
 
+#include "core/convex_polygon.hpp"
+
 #include "core/check.hpp"
 
 #include <algorithm>
@@ -318,81 +320,14 @@ std::vector<Vec3> contact_feature(const PosedPiece& p, Feature feature, const Ve
   return points;
 }
 
-using Vec2 = Eigen::Vector2d;
-
-double cross2(const Vec2& a, const Vec2& b) {
-  return a.x() * b.y() - a.y() * b.x();
-}
-
-// Removes repeated points (closer than `tol`) and makes a polygon counter-clockwise.
-std::vector<Vec2> tidy(const std::vector<Vec2>& in, double tol) {
-  std::vector<Vec2> out;
-  for (const Vec2& p : in) {
-    if (out.empty() || (p - out.back()).norm() > tol) out.push_back(p);
-  }
-  while (out.size() > 1 && (out.front() - out.back()).norm() <= tol) out.pop_back();
-  if (out.size() >= 3) {
-    double area = 0.0;
-    for (std::size_t i = 0; i < out.size(); ++i) area += cross2(out[i], out[(i + 1) % out.size()]);
-    if (area < 0.0) std::reverse(out.begin(), out.end());
-    if (std::abs(area) <= tol * tol) {
-      // Collinear points: keep the two extremes.
-      std::size_t i0 = 0, i1 = 0;
-      const Vec2 dir = out[1] - out[0];
-      for (std::size_t i = 0; i < out.size(); ++i) {
-        if (out[i].dot(dir) < out[i0].dot(dir)) i0 = i;
-        if (out[i].dot(dir) > out[i1].dot(dir)) i1 = i;
-      }
-      out = {out[i0], out[i1]};
-    }
-  }
-  return out;
-}
-
-// Intersection of two convex sets given as points (1 point, a segment of 2, or a CCW polygon).
-std::vector<Vec2> intersect(const std::vector<Vec2>& a, const std::vector<Vec2>& b) {
-  if (a.size() == 1) return a;
-  if (b.size() == 1) return b;
-  if (a.size() == 2 && b.size() == 2) {
-    const Vec2 dir = (a[1] - a[0]).normalized();
-    const double a0 = a[0].dot(dir), a1 = a[1].dot(dir);
-    const double lo = std::max(std::min(a0, a1), std::min(b[0].dot(dir), b[1].dot(dir)));
-    const double hi = std::min(std::max(a0, a1), std::max(b[0].dot(dir), b[1].dot(dir)));
-    if (lo > hi) return {};
-    auto at = [&](double s) { return Vec2(a[0] + ((s - a0) / (a1 - a0)) * (a[1] - a[0])); };
-    return {at(lo), at(hi)};
-  }
-  // Clip the smaller-dimensional set (or a) against each edge of the polygon.
-  const std::vector<Vec2>& poly = a.size() == 2 ? b : (b.size() == 2 ? a : b);
-  std::vector<Vec2> subject = a.size() == 2 ? a : (b.size() == 2 ? b : a);
-  const bool segment = subject.size() == 2;
-  for (std::size_t i = 0; i < poly.size() && !subject.empty(); ++i) {
-    const Vec2& e0 = poly[i];
-    const Vec2 e = poly[(i + 1) % poly.size()] - e0;
-    std::vector<Vec2> out;
-    const std::size_t count = segment ? 1 : subject.size();
-    for (std::size_t k = 0; k < count; ++k) {
-      const Vec2& p = subject[k];
-      const Vec2& q = subject[(k + 1) % subject.size()];
-      const double sp = cross2(e, p - e0);
-      const double sq = cross2(e, q - e0);
-      if (sp >= 0.0) out.push_back(p);
-      if ((sp < 0.0 && sq > 0.0) || (sp > 0.0 && sq < 0.0))
-        out.push_back(p + (sp / (sp - sq)) * (q - p));
-      if (segment && sq >= 0.0) out.push_back(q);
-    }
-    subject = out;
-  }
-  return subject;
-}
-
 }  // namespace
 
-std::vector<Vec3> contact_patch(const ShapeGeometry& g1, const Pose& pose1, const ShapeGeometry& g2,
-                                const Pose& pose2, const DistanceResult& closest,
-                                double envelope_m) {
+ContactGeometry contact_geometry(const ShapeGeometry& g1, const Pose& pose1,
+                                 const ShapeGeometry& g2, const Pose& pose2,
+                                 const DistanceResult& closest, double envelope_m) {
+  ContactGeometry out;
   if (closest.status != ContactStatus::kSeparated && closest.status != ContactStatus::kTouching) {
-    return {};
+    return out;
   }
   const PosedPiece a =
       pose_piece(g1.pieces()[closest.piece1], pose1.x_W, pose1.q_WM.toRotationMatrix());
@@ -400,15 +335,16 @@ std::vector<Vec3> contact_patch(const ShapeGeometry& g1, const Pose& pose1, cons
       pose_piece(g2.pieces()[closest.piece2], pose2.x_W, pose2.q_WM.toRotationMatrix());
   const Vec3& n = closest.n_W;
   const double limit = closest.distance + envelope_m;
-  bool unbounded1 = false, unbounded2 = false;
   // Body 1's contact feature within the limit above body 2's support plane; body 2's within the
   // limit below body 1's.
   auto height1 = [&](const Vec3& x) { return n.dot(x - closest.p2_W); };
   auto height2 = [&](const Vec3& x) { return n.dot(closest.p1_W - x); };
-  const std::vector<Vec3> face1 =
-      contact_feature(a, closest.feature1, -n, closest.p1_W, height1, limit, unbounded1);
-  const std::vector<Vec3> face2 =
-      contact_feature(b, closest.feature2, n, closest.p2_W, height2, limit, unbounded2);
+  out.feature1 =
+      contact_feature(a, closest.feature1, -n, closest.p1_W, height1, limit, out.unbounded1);
+  out.feature2 =
+      contact_feature(b, closest.feature2, n, closest.p2_W, height2, limit, out.unbounded2);
+  const std::vector<Vec3>& face1 = out.feature1;
+  const std::vector<Vec3>& face2 = out.feature2;
   // Projection onto body 2's support plane, coordinates along (t1, t2) with t1 x t2 = n.
   const Vec3 t1 = n.unitOrthogonal();
   const Vec3 t2 = n.cross(t1);
@@ -422,20 +358,25 @@ std::vector<Vec3> contact_patch(const ShapeGeometry& g1, const Pose& pose1, cons
     return tidy(out, tol);
   };
   std::vector<Vec2> patch;
-  if (unbounded1) {
+  if (out.unbounded1) {
     patch = project(face2);
-  } else if (unbounded2) {
+  } else if (out.unbounded2) {
     patch = project(face1);
   } else {
     patch = tidy(intersect(project(face1), project(face2)), tol);
   }
-  std::vector<Vec3> out;
   if (patch.empty()) {
-    out.push_back(closest.p2_W);
+    out.patch.push_back(closest.p2_W);
     return out;
   }
-  for (const Vec2& p : patch) out.push_back(origin + p.x() * t1 + p.y() * t2);
+  for (const Vec2& p : patch) out.patch.push_back(origin + p.x() * t1 + p.y() * t2);
   return out;
+}
+
+std::vector<Vec3> contact_patch(const ShapeGeometry& g1, const Pose& pose1, const ShapeGeometry& g2,
+                                const Pose& pose2, const DistanceResult& closest,
+                                double envelope_m) {
+  return contact_geometry(g1, pose1, g2, pose2, closest, envelope_m).patch;
 }
 
 }  // namespace palpable

@@ -129,4 +129,16 @@ std::vector<Vec3> contact_patch(const ShapeGeometry& g1, const Pose& pose1, cons
                                 const Pose& pose2, const DistanceResult& closest,
                                 double envelope_m);
 
+// The same, with the contact feature of each body it was made from: a face (3 or more points,
+// counter-clockwise about that body's outward normal), an edge (2), a point (1; a sphere's closest
+// point), or unbounded (a halfspace: no points).
+struct ContactGeometry {
+  std::vector<Vec3> feature1, feature2;  // world frame, on each body's surface
+  bool unbounded1 = false, unbounded2 = false;
+  std::vector<Vec3> patch;  // as contact_patch
+};
+ContactGeometry contact_geometry(const ShapeGeometry& g1, const Pose& pose1,
+                                 const ShapeGeometry& g2, const Pose& pose2,
+                                 const DistanceResult& closest, double envelope_m);
+
 }  // namespace palpable

@@ -42,7 +42,8 @@ ToiBound toi_bound(const ToiMotion& motion1, const ToiMotion& motion2,
   const Vec3 d_hat = -closest.n_W;
   bound.closing_speed = (motion1.v_W - motion2.v_W).dot(d_hat) + rotational_term(motion1, d_hat) +
                         rotational_term(motion2, d_hat);
-  bound.closing_accel = (motion1.a_W - motion2.a_W).dot(d_hat);
+  bound.closing_accel =
+      (motion1.a_W - motion2.a_W).dot(d_hat) + motion1.accel_slack + motion2.accel_slack;
   const double delta = closest.distance - d_target;
   const double a = bound.closing_accel, b = bound.closing_speed;
   if (delta <= 0.0 && b < 0.0) {

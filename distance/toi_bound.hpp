@@ -32,10 +32,12 @@ namespace palpable {
 
 // How one body moves over the coming interval, as far as the bound needs it.
 struct ToiMotion {
-  Vec3 v_W = Vec3::Zero();  // velocity of the reference point (centre of mass, or the
-                            // kinematic axis point) [m/s]
-  Vec3 a_W = Vec3::Zero();  // its constant acceleration: gravity for a dynamic body, 0
-                            // for fixed and kinematic bodies [m/s^2]
+  Vec3 v_W = Vec3::Zero();   // velocity of the reference point (centre of mass, or the
+                             // kinematic axis point) [m/s]
+  Vec3 a_W = Vec3::Zero();   // its constant acceleration: gravity for a dynamic body, 0
+                             // for fixed and kinematic bodies [m/s^2]
+  double accel_slack = 0.0;  // how far the true acceleration may be from a_W [m/s^2] (a body
+                             // held in contact whose motion is integrated)
   // Dynamic body: the rotational term is omega_bound * rotation_radius (0 if either is 0).
   // Kinematic body: |spin_W x d̂| * rotation_radius (0 if the cross product is 0).
   bool kinematic = false;

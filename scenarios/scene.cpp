@@ -247,7 +247,18 @@ void parse_settings(const Reader& r, const json& value, const std::string& path,
   r.only_keys(value, path,
               {"envelope", "microcollision_speed", "integration_tolerance", "restitution_law",
                "microcollision_rule", "retry_limit", "centre_of_pressure", "broad_phase_horizon",
-               "broad_phase_max_sweep"});
+               "broad_phase_max_sweep", "contact_model"});
+  if (value.contains("contact_model")) {
+    const std::string model = r.string(value["contact_model"], path + "/contact_model");
+    if (model == "persistent") {
+      s.contact_model = ContactModel::kPersistent;
+    } else if (model == "microcollisions") {
+      s.contact_model = ContactModel::kMicrocollisions;
+    } else {
+      r.fail_value(path + "/contact_model", value["contact_model"],
+                   "\"persistent\" or \"microcollisions\"");
+    }
+  }
   if (value.contains("centre_of_pressure")) {
     const json& v = value["centre_of_pressure"];
     if (!v.is_boolean()) r.fail_value(path + "/centre_of_pressure", v, "true or false");

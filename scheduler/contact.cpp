@@ -145,10 +145,12 @@ struct Pass {
 };
 
 Pass impulse_pass(const Contact& c, const ContactSide& side1, const ContactSide& side2,
-                  const Material& material, const Settings& settings, double stack_mass) {
+                  const Material& material, const Settings& settings, double stack_mass,
+                  const ResolveOptions& options) {
   Pass pass;
   CollisionParameters params = collision_parameters(material, settings);
-  params.min_rebound_speed = c.g_n > 0.0 ? c.v_micro : 0.0;
+  params.min_rebound_speed = options.microcollisions && c.g_n > 0.0 ? c.v_micro : 0.0;
+  if (options.restitution >= 0.0) params.restitution = options.restitution;
   pass.R_WC = contact_frame_W(c.n_W);
   pass.cb1 = c.body1;
   pass.cb2 = c.body2;
@@ -161,7 +163,7 @@ Pass impulse_pass(const Contact& c, const ContactSide& side1, const ContactSide&
   const FrameProblem problem = frame_problem(pass.cb1, pass.cb2, R_WC);
   const Mat3& K_c = problem.K_c;
   pass.u0_c = problem.u0_c;
-  pass.micro = is_microcollision(pass.u0_c.z(), c.v_micro, settings);
+  pass.micro = options.microcollisions && is_microcollision(pass.u0_c.z(), c.v_micro, settings);
   if (pass.micro) {
     MicrocollisionContext context;
     const Vec3 a_c = R_WC.transpose() * c.a_rel_W;
@@ -310,11 +312,13 @@ Contact make_contact(const ContactSide& side1, const ContactSide& side2, const D
   c.x1_W = s1.x_W;
   c.x2_W = s2.x_W;
 
-  auto gravity_on = [&](const Body& b) -> Vec3 {
-    return b.is_dynamic() ? gravity_W : Vec3::Zero();
+  auto acceleration = [&](const ContactSide& side) -> Vec3 {
+    if (side.acceleration_W) return *side.acceleration_W;
+    return side.body.is_dynamic() ? gravity_W : Vec3::Zero();
   };
-  c.g_n = -(gravity_on(b1) - gravity_on(b2)).dot(c.n_W);
-  if (c.dynamic == DynamicSide::kBoth) {
+  c.held_acceleration = side1.acceleration_W || side2.acceleration_W;
+  c.g_n = -(acceleration(side1) - acceleration(side2)).dot(c.n_W);
+  if (c.dynamic == DynamicSide::kBoth && !c.held_acceleration) {
     // Same gravity on both: use the upper body's weight along n (DESIGN.md §4).
     c.g_n = std::abs(gravity_W.dot(c.n_W));
   }
@@ -379,7 +383,9 @@ bool approaching(const Contact& c) {
   // approach within rounding of the bodies' speeds (what an e = 0 collision leaves) is rest.
   // Two dynamic bodies share gravity, so nothing presses them together at rest: a body resting
   // on another rides along when the lower one bounces on its support (see carries_riders).
-  if (c.g_n > 0.0 && c.dynamic != DynamicSide::kBoth) return c.u_n <= 1e-9 * c.v_micro;
+  if (c.g_n > 0.0 && (c.dynamic != DynamicSide::kBoth || c.held_acceleration)) {
+    return c.u_n <= 1e-9 * c.v_micro;
+  }
   const double scale =
       contact_point_velocity_W(c.body1).norm() + contact_point_velocity_W(c.body2).norm();
   return c.u_n < -1e-12 * scale;
@@ -406,7 +412,7 @@ bool carries_riders(const Contact& c, const Settings& settings, const Vec3& grav
 
 Resolution resolve(Contact c, const ContactSide& side1, const ContactSide& side2,
                    const Material& material, const Settings& settings,
-                   const std::vector<Rider>& riders, double t) {
+                   const std::vector<Rider>& riders, double t, const ResolveOptions& options) {
   Resolution out;
   // Stages 1-3, at most twice over a face (the second pass at the tipping point) and at most
   // three times over a segment (moved to where its torque vanishes, then tipping if it leaves).
@@ -420,7 +426,7 @@ Resolution resolve(Contact c, const ContactSide& side1, const ContactSide& side2
   for (int round = 0;; ++round) {
     // Riders ride on a face resting on its support; a tipping carrier turns and carries none.
     if (c.placement != Placement::kFace) stack_mass = 0.0;
-    pass = impulse_pass(c, side1, side2, material, settings, stack_mass);
+    pass = impulse_pass(c, side1, side2, material, settings, stack_mass, options);
     out.integration_steps += pass.steps;
     if (pass.failed) ++out.impulse_failures;
     at = locate_pressure(c, pass.p_W, round == 0);
@@ -506,7 +512,7 @@ Resolution resolve(Contact c, const ContactSide& side1, const ContactSide& side2
 
   const double p_norm = pass.p_W.norm();
   out.energy_allowance = settings.integration_tolerance * p_norm * std::abs(pass.u0_c.z());
-  if (c.g_n > 0.0) {
+  if (c.g_n > 0.0 && options.microcollisions) {
     const double slack = 1.0 + settings.microcollision_speed_slack;
     const double m_red = 1.0 / (c.body1.inv_mass + c.body2.inv_mass);
     const Vec3 u_after = pass.result.u_final_c;

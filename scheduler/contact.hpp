@@ -73,6 +73,9 @@ struct ContactSide {
   const Body& body;
   const ShapeGeometry& geometry;
   const BodyState& state;
+  // The body's acceleration if it is not that of free flight (gravity for a dynamic body, zero
+  // for the others): a body held in contact (scheduler/island.hpp). Null: free flight.
+  const Vec3* acceleration_W = nullptr;
 };
 
 // Everything the collision of a pair needs, in the world frame; body 1 = a, body 2 = b.
@@ -86,6 +89,7 @@ struct Contact {
   Vec3 x1_W = Vec3::Zero(), x2_W = Vec3::Zero();  // the centres of mass
   double u_n = 0.0;                   // relative normal velocity (< 0 approaching) [m/s]
   double g_n = 0.0;                   // relative normal acceleration toward contact (>= 0) [m/s^2]
+  bool held_acceleration = false;     // g_n is from a held body's true acceleration
   double v_micro = 0.0;               // microcollision speed of this contact [m/s]
   Vec3 a_rel_W = Vec3::Zero();        // slip acceleration at the moving contact location [m/s^2]
   Vec3 segment_dir_W = Vec3::Zero();  // kSegment: unit, along the segment patch
@@ -176,10 +180,22 @@ struct Resolution {
   int impulse_failures = 0;   // passes whose integration failed (the frictionless impulse stood in)
 };
 
+// How a collision may end.
+struct ResolveOptions {
+  // A collision slower than the microcollision speed is a microcollision (Mirtich's contact
+  // model). Under the persistent contact model every collision is integrated with the material's
+  // restitution and no rebound floor, and a slow one hands its contact to the hold.
+  bool microcollisions = true;
+  // >= 0: the restitution to use instead of the material's (0: a plastic collision, the hand-over
+  // of a contact arriving slower than the microcollision speed).
+  double restitution = -1.0;
+};
+
 // Resolves the collision of `c` (a contact with its patch, made from side1 and side2) at time t.
 // `riders`: the bodies it carries (non-empty only if carries_riders(c)).
 Resolution resolve(Contact c, const ContactSide& side1, const ContactSide& side2,
                    const Material& material, const Settings& settings,
-                   const std::vector<Rider>& riders, double t);
+                   const std::vector<Rider>& riders, double t,
+                   const ResolveOptions& options = ResolveOptions{});
 
 }  // namespace palpable

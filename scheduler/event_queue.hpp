@@ -25,8 +25,9 @@ namespace palpable {
 // Ordered: at equal times a kind listed earlier is processed first.
 enum class EventKind : std::uint8_t {
   kPairCheck = 0,  // a pair's conservative bound (or exact time of impact) expires
-  kHorizon = 1,    // a body's broad-phase horizon expires: refresh its swept box and pairs
-  kSample = 2,     // write an output sample (extrapolated, commits nothing)
+  kIsland = 1,     // the motion of bodies held in contact changes mode (scheduler/island.hpp)
+  kHorizon = 2,    // a body's broad-phase horizon expires: refresh its swept box and pairs
+  kSample = 3,     // write an output sample (extrapolated, commits nothing)
 };
 
 struct Event {

@@ -55,7 +55,8 @@ PairSet::PairSet(const World& world, EventQueue& queue, SimulationStats& stats)
   }
 }
 
-bool PairSet::compute_box(BodyId id, const BodyState& s, double t, bool limit_sweep) {
+bool PairSet::compute_box(BodyId id, const BodyState& s, double t, bool limit_sweep,
+                          const HeldMotion* held) {
   BodyRuntime& rt = bodies_[id.index];
   const Body& b = world_.bodies[id.index];
   const Settings& settings = world_.settings;
@@ -91,8 +92,9 @@ bool PairSet::compute_box(BodyId id, const BodyState& s, double t, bool limit_sw
     rt.horizon = t + horizon;
     return false;
   }
-  const Vec3& g = world_.gravity_W;
-  if (s.v_W.squaredNorm() == 0.0 && g.squaredNorm() == 0.0) {
+  const Vec3& g = held ? held->a_W : world_.gravity_W;
+  const double slack = held ? held->a_slack : 0.0;
+  if (s.v_W.squaredNorm() == 0.0 && g.squaredNorm() == 0.0 && slack == 0.0) {
     rt.box = grown(parabola_box(s.x_W, s.v_W, g, 0.0), reach + margin);
     rt.horizon = kInfinity;
     return false;
@@ -102,13 +104,14 @@ bool PairSet::compute_box(BodyId id, const BodyState& s, double t, bool limit_sw
   const double max_travel = settings.broad_phase_max_sweep * reach;
   const bool cut = limit_sweep && travel > max_travel;
   if (cut) dt *= max_travel / travel;
-  rt.box = grown(parabola_box(s.x_W, s.v_W, g, dt), reach + margin);
+  rt.box = grown(parabola_box(s.x_W, s.v_W, g, dt), reach + margin + 0.5 * slack * dt * dt);
   rt.horizon = t + dt;
   return cut;
 }
 
-bool PairSet::refresh_box(BodyId id, const BodyState& s, double t, bool limit_sweep) {
-  const bool cut = compute_box(id, s, t, limit_sweep);
+bool PairSet::refresh_box(BodyId id, const BodyState& s, double t, bool limit_sweep,
+                          const HeldMotion* held) {
+  const bool cut = compute_box(id, s, t, limit_sweep, held);
   (world_.bodies[id.index].is_dynamic() ? dynamic_boxes_ : static_boxes_)
       .set(id.index, bodies_[id.index].box);
   return cut;
@@ -186,11 +189,11 @@ std::size_t PairSet::find_overlaps(BodyId id, std::vector<std::uint32_t>& out) {
   return dynamic_count;
 }
 
-void PairSet::refresh(BodyId id, const BodyState& s, double t) {
+void PairSet::refresh(BodyId id, const BodyState& s, double t, const HeldMotion* held) {
   bool found = false;  // `overlapping_` holds the overlaps of the box stored
-  if (refresh_box(id, s, t, /*limit_sweep=*/true)) {
+  if (refresh_box(id, s, t, /*limit_sweep=*/true, held)) {
     found = find_overlaps(id, overlapping_) > 0;
-    if (!found) refresh_box(id, s, t, /*limit_sweep=*/false);
+    if (!found) refresh_box(id, s, t, /*limit_sweep=*/false, held);
   }
   schedule_horizon(id);
   if (!found) find_overlaps(id, overlapping_);

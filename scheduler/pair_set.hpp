@@ -27,6 +27,13 @@ namespace palpable {
 
 struct SimulationStats;
 
+// How a dynamic body moves over its coming horizon when it is held in contact rather than in free
+// flight (scheduler/island.hpp): its acceleration and how far the true one may be from it.
+struct HeldMotion {
+  Vec3 a_W = Vec3::Zero();  // [m/s^2]
+  double a_slack = 0.0;     // [m/s^2]
+};
+
 class PairSet {
  public:
   struct BodyRuntime {
@@ -46,6 +53,7 @@ class PairSet {
     std::uint64_t rebound_round = 0;  // the last collect_rebounds that listed it
     PairCache cache;
     bool live = false;
+    bool held = false;  // its contact is held (scheduler/island.hpp): no pair events
   };
 
   // One geometry per distinct shape (shapes are shared between bodies). Throws InputError
@@ -73,7 +81,7 @@ class PairSet {
   // of its collisions (it halves the cost per collision of a 10,000-sphere gas). A body with no
   // moving body near even its short box - a projectile in empty space, a ball bouncing alone on
   // a floor - keeps the whole horizon: shortening it would only add refreshes.
-  void refresh(BodyId id, const BodyState& s, double t);
+  void refresh(BodyId id, const BodyState& s, double t, const HeldMotion* held = nullptr);
   // The pairs of the dynamic bodies among `moved`, each listed once (a pair of two moved bodies
   // too), in order: what a collision that changed those bodies' motion must re-bound. A fixed
   // or kinematic body's motion never changes in a collision, so its other pairs' bounds stay
@@ -84,8 +92,10 @@ class PairSet {
  private:
   // Computes the swept box; with `limit_sweep` a dynamic body's horizon is cut to the sweep
   // limit; returns whether that cut it.
-  bool compute_box(BodyId id, const BodyState& s, double t, bool limit_sweep);
-  bool refresh_box(BodyId id, const BodyState& s, double t, bool limit_sweep);
+  bool compute_box(BodyId id, const BodyState& s, double t, bool limit_sweep,
+                   const HeldMotion* held);
+  bool refresh_box(BodyId id, const BodyState& s, double t, bool limit_sweep,
+                   const HeldMotion* held = nullptr);
   void schedule_horizon(BodyId id);
   std::uint32_t create_pair(BodyId a, BodyId b);
   void remove_pair(std::uint32_t index);

@@ -5,10 +5,12 @@
 #include "distance/closest_features.hpp"
 #include "distance/toi_bound.hpp"
 #include "impulse/microcollision.hpp"
+#include "scheduler/island.hpp"
 #include "scheduler/pair_set.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 
 namespace palpable {
 
@@ -22,6 +24,15 @@ struct Simulation::Impl {
   EventQueue queue;
   PairSet pairs;
   std::uint64_t next_sample = 0;
+  SimulationObserver* observer = nullptr;  // of the step being processed
+
+  // Persistent contact (scheduler/island.hpp): islands of held bodies, in slots.
+  std::vector<Island> islands;
+  std::vector<EventQueue::EventId> island_events;  // per slot
+  std::vector<bool> island_live;                   // per slot
+  std::vector<std::uint32_t> free_islands;
+  std::vector<int> island_of;                    // per body: its island slot, or -1
+  std::vector<const ShapeGeometry*> geometries;  // per body
 
   Impl(World w, SimulationOptions o)
       : world(std::move(w)), options(o), queue(o.queue), pairs(world, queue, stats) {}
@@ -30,22 +41,44 @@ struct Simulation::Impl {
   Body& body(BodyId id) { return world.bodies[id.index]; }
   const Body& body(BodyId id) const { return world.bodies[id.index]; }
 
+  bool persistent() const { return settings().contact_model == ContactModel::kPersistent; }
+  const Island* island(BodyId id) const {
+    const int i = island_of.empty() ? -1 : island_of[id.index];
+    return i >= 0 ? &islands[static_cast<std::size_t>(i)] : nullptr;
+  }
+
   BodyState extrapolate(BodyId id, double t) const {
     const Body& b = body(id);
     if (t <= b.state.t) return b.state;
+    if (const Island* is = island(id)) {
+      return is->state_at(static_cast<std::size_t>(is->index_of(id)), t);
+    }
     return advance(b, b.state, t, world.gravity_W, settings());
   }
   void commit(BodyId id, double t) {
     Body& b = body(id);
-    if (t > b.state.t) b.state = advance(b, b.state, t, world.gravity_W, settings());
+    if (t > b.state.t) b.state = extrapolate(id, t);
+  }
+  // A held body's acceleration (its island's), or null for free flight.
+  const Vec3* held_acceleration(BodyId id) const {
+    const Island* is = island(id);
+    return is ? &is->acceleration(static_cast<std::size_t>(is->index_of(id))) : nullptr;
   }
   ContactSide side(BodyId id, const BodyState& s) const {
-    return ContactSide{id, body(id), pairs.geometry(id), s};
+    return ContactSide{id, body(id), pairs.geometry(id), s, held_acceleration(id)};
   }
 
   // ---------------------------------------------------------------- pairs and bounds
 
-  void refresh_broad_phase(BodyId id, double t) { pairs.refresh(id, extrapolate(id, t), t); }
+  void refresh_broad_phase(BodyId id, double t) {
+    if (const Island* is = island(id)) {
+      const Island::MotionBound b = is->bound(static_cast<std::size_t>(is->index_of(id)));
+      const HeldMotion held{b.a_W, b.a_slack};
+      pairs.refresh(id, extrapolate(id, t), t, &held);
+      return;
+    }
+    pairs.refresh(id, extrapolate(id, t), t);
+  }
 
   // After a collision: the boxes and pairs of every dynamic body it moved (the pair's and the
   // riders it carried), then every pair of those bodies re-bounded once. A fixed body's box never
@@ -102,10 +135,10 @@ struct Simulation::Impl {
     if (dr.status == ContactStatus::kPenetrating) ++stats.penetrations;
     // DESIGN.md §5 step 6: no penetration deeper than the envelope (a polyhedron pair's depth is
     // unknown here: any overlap of one fails).
-    PALPABLE_DCHECK(dr.status != ContactStatus::kPenetrating ||
-                        dr.penetration_depth <= settings().envelope_m,
-                    "bodies " + body(p.a).name + " and " + body(p.b).name + " overlap at t = " +
-                        std::to_string(now));
+    PALPABLE_DCHECK(
+        dr.status != ContactStatus::kPenetrating || dr.penetration_depth <= settings().envelope_m,
+        "bodies " + body(p.a).name + " and " + body(p.b).name +
+            " overlap at t = " + std::to_string(now));
     return dr;
   }
 
@@ -129,6 +162,39 @@ struct Simulation::Impl {
       }
     }
     return *best;
+  }
+
+  // How a body moves over the coming interval, for a bound: free flight, or its island's motion.
+  ToiMotion motion_for(BodyId id, const BodyState& s, const BodyState& other,
+                       BodyId other_id) const {
+    if (const Island* is = island(id)) {
+      const Island::MotionBound b = is->bound(static_cast<std::size_t>(is->index_of(id)));
+      ToiMotion m;
+      m.v_W = s.v_W;
+      m.a_W = b.a_W;
+      m.accel_slack = b.a_slack;
+      m.omega_bound = b.w_bound;
+      m.rotation_radius = pairs.geometry(id).rotation_radius();
+      return m;
+    }
+    return toi_motion(body(id), s, pairs.geometry(id), world.gravity_W, other.x_W,
+                      pairs.geometry(other_id).reach(), settings());
+  }
+
+  // The conservative bound of a pair with a held body (never exact: no closed form follows a held
+  // body's motion).
+  ToiBound held_time_of_impact(const PairSet::Pair& p, const BodyState& s1, const BodyState& s2,
+                               const DistanceResult& dr) const {
+    const ToiMotion m1 = motion_for(p.a, s1, s2, p.b);
+    const ToiMotion m2 = motion_for(p.b, s2, s1, p.a);
+    const double d_target = 0.5 * settings().envelope_m;
+    if (p.cache.piece_results().empty()) return toi_bound(m1, m2, dr, d_target, settings());
+    ToiBound best;
+    for (const DistanceResult& piece : p.cache.piece_results()) {
+      const ToiBound b = toi_bound(m1, m2, piece, d_target, settings());
+      if (b.dt < best.dt) best = b;
+    }
+    return best;
   }
 
   // The next event time of a pair from its closest features at time t.
@@ -156,8 +222,11 @@ struct Simulation::Impl {
         resting = c.g_n == 0.0;
       }
     }
-    ToiBound bound = time_of_impact(body(p.a), s1, pairs.geometry(p.a), body(p.b), s2,
-                                    pairs.geometry(p.b), dr, p.cache, world.gravity_W, settings());
+    ToiBound bound =
+        island(p.a) || island(p.b)
+            ? held_time_of_impact(p, s1, s2, dr)
+            : time_of_impact(body(p.a), s1, pairs.geometry(p.a), body(p.b), s2, pairs.geometry(p.b),
+                             dr, p.cache, world.gravity_W, settings());
     if (bound.floored) ++stats.floored_bounds;
     if (bound.exact) ++stats.exact_bounds;
     if (bound.exact && resting && bound.dt < floor) {
@@ -175,6 +244,10 @@ struct Simulation::Impl {
 
   void rebound(std::uint32_t index, double t) {
     PairSet::Pair& p = pairs.pair(index);
+    if (p.held) {
+      schedule_pair(index, kInfinity);  // its island watches it
+      return;
+    }
     const BodyState s1 = extrapolate(p.a, t);
     const BodyState s2 = extrapolate(p.b, t);
     ++stats.bound_queries;
@@ -222,16 +295,17 @@ struct Simulation::Impl {
 
   // Resolves the collision of contact `c` (of pair `p`, states committed at t), commits the new
   // velocities and returns the record.
-  CollisionRecord collide(const PairSet::Pair& p, Contact& c, double t) {
+  CollisionRecord collide(const PairSet::Pair& p, Contact& c, double t,
+                          const ResolveOptions& options = ResolveOptions{}) {
     std::vector<BodyId> rider_ids;
-    if (carries_riders(c, settings(), world.gravity_W)) {
+    if (options.microcollisions && carries_riders(c, settings(), world.gravity_W)) {
       collect_riders(c.dynamic1() ? p.a : p.b, t, 0, rider_ids);
       for (BodyId r : rider_ids) commit(r, t);
     }
     std::vector<Rider> riders;
     for (BodyId r : rider_ids) riders.push_back(Rider{r, body(r), body(r).state});
     Resolution out = resolve(c, side(p.a, body(p.a).state), side(p.b, body(p.b).state),
-                             world.material(p.a, p.b), settings(), riders, t);
+                             world.material(p.a, p.b), settings(), riders, t, options);
     stats.integration_steps += static_cast<std::uint64_t>(out.integration_steps);
     stats.impulse_failures += static_cast<std::uint64_t>(out.impulse_failures);
     auto store = [&](BodyId id, const Vec3& v, const Vec3& w) {
@@ -292,9 +366,293 @@ struct Simulation::Impl {
       p.last_collision_t = t;
       p.collisions_at_t = 0;
     }
+    if (persistent()) return collide_or_hold(index, c, DistanceResult(contact), t);
     CollisionRecord record = collide(p, c, t);
     refresh_after_collision(record, t);  // `p` may move when pairs are created there
     return record;
+  }
+
+  // ---------------------------------------------------------------- persistent contact
+
+  void report(const char* kind, BodyId a, BodyId b, const Vec3& p_W, double t) {
+    if (observer) observer->on_mode_change(ModeChange{t, kind, a, b, p_W});
+  }
+
+  // Under the persistent contact model (DESIGN.md §8.1): the collision is integrated with the
+  // material's restitution and no rebound floor (plastic if it arrives slower than the
+  // microcollision speed: what would have started a microcollision train); if the contact then
+  // separates slower than the microcollision speed, it is held.
+  CollisionRecord collide_or_hold(std::uint32_t index, Contact& c, const DistanceResult& dr,
+                                  double t) {
+    const bool gentle =
+        -initial_normal_velocity(c) <= c.v_micro * (1.0 + settings().microcollision_speed_slack);
+    ResolveOptions options;
+    options.microcollisions = false;
+    if (gentle) options.restitution = 0.0;
+    PairSet::Pair& p = pairs.pair(index);
+    const BodyId a = p.a, b = p.b;
+    CollisionRecord record = collide(p, c, t, options);
+    const Vec3 u_after =
+        point_velocity_W(body(a).state, record.p_W) - point_velocity_W(body(b).state, record.p_W);
+    const bool held = u_after.dot(record.n_W) < c.v_micro && hold(index, dr, t);
+    if (!held) after_collision(record, t);
+    return record;
+  }
+
+  // A collision changed the velocities of these bodies: islands re-plan, free bodies re-bound.
+  void after_collision(const CollisionRecord& record, double t) {
+    CollisionRecord free_part = record;
+    free_part.carried.clear();
+    std::vector<int> replanned;
+    for (BodyId id : {record.a, record.b}) {
+      const int i = island_of[id.index];
+      if (i >= 0 && std::find(replanned.begin(), replanned.end(), i) == replanned.end()) {
+        replanned.push_back(i);
+        replan(static_cast<std::uint32_t>(i), t);
+      }
+    }
+    refresh_after_collision(free_part, t);
+  }
+
+  // Holds the contact of pair `index` (closest features `dr`, states committed at t): its link
+  // joins the island of its dynamic bodies. False if its features offer no plane.
+  bool hold(std::uint32_t index, const DistanceResult& dr, double t) {
+    PairSet::Pair& p = pairs.pair(index);
+    const Body& ba = body(p.a);
+    const Body& bb = body(p.b);
+    const ContactGeometry g = contact_geometry(
+        pairs.geometry(p.a), Pose{ba.state.x_W, ba.state.q_WM}, pairs.geometry(p.b),
+        Pose{bb.state.x_W, bb.state.q_WM}, dr, settings().envelope_m);
+    const std::optional<HeldLink> link =
+        make_held_link(index, p.a, p.b, LinkSide{ba, pairs.geometry(p.a), ba.state},
+                       LinkSide{bb, pairs.geometry(p.b), bb.state}, dr, g);
+    if (!link) return false;
+    std::vector<BodyId> dynamic;
+    for (BodyId id : {p.a, p.b}) {
+      if (body(id).is_dynamic()) dynamic.push_back(id);
+    }
+    const std::uint32_t i = join(dynamic, t);
+    islands[i].links.push_back(*link);
+    p.held = true;
+    schedule_pair(index, kInfinity);
+    ++stats.holds;
+    report("hold", p.a, p.b, dr.p2_W, t);
+    replan(i, t);
+    return true;
+  }
+
+  // The island holding all of `ids` (dynamic bodies): theirs merged, or a new one.
+  std::uint32_t join(const std::vector<BodyId>& ids, double t) {
+    int target = -1;
+    for (BodyId id : ids) {
+      const int i = island_of[id.index];
+      if (i < 0) continue;
+      if (target < 0) {
+        target = i;
+      } else if (i != target) {
+        Island& from = islands[static_cast<std::size_t>(i)];
+        Island& to = islands[static_cast<std::size_t>(target)];
+        for (BodyId b : from.bodies) {
+          commit(b, t);
+          to.bodies.push_back(b);
+          island_of[b.index] = target;
+        }
+        to.links.insert(to.links.end(), from.links.begin(), from.links.end());
+        release_slot(static_cast<std::uint32_t>(i));
+      }
+    }
+    if (target < 0) target = static_cast<int>(new_slot());
+    Island& is = islands[static_cast<std::size_t>(target)];
+    for (BodyId id : ids) {
+      if (island_of[id.index] == target) continue;
+      commit(id, t);
+      is.bodies.push_back(id);
+      island_of[id.index] = target;
+    }
+    return static_cast<std::uint32_t>(target);
+  }
+
+  std::uint32_t new_slot() {
+    std::uint32_t i;
+    if (!free_islands.empty()) {
+      i = free_islands.back();
+      free_islands.pop_back();
+    } else {
+      i = static_cast<std::uint32_t>(islands.size());
+      islands.emplace_back();
+      island_events.push_back(EventQueue::kNoEvent);
+      island_live.push_back(false);
+    }
+    islands[i] = Island{};
+    island_live[i] = true;
+    return i;
+  }
+
+  void release_slot(std::uint32_t i) {
+    if (island_events[i] != EventQueue::kNoEvent) queue.erase(island_events[i]);
+    island_events[i] = EventQueue::kNoEvent;
+    islands[i] = Island{};
+    island_live[i] = false;
+    free_islands.push_back(i);
+  }
+
+  // Plans island i's motion from time t (after a collision, a hold or one of its events), then
+  // splits it where its links no longer connect it, frees bodies held by nothing, queues its next
+  // event and refreshes its bodies' boxes and bounds.
+  void replan(std::uint32_t i, double t) {
+    std::vector<BodyId> touched = islands[i].bodies;
+    for (BodyId id : touched) commit(id, t);
+    std::vector<std::uint32_t> todo{i};
+    // Components of the links among dynamic bodies; every body reached by a link stays held.
+    while (!todo.empty()) {
+      const std::uint32_t k = todo.back();
+      todo.pop_back();
+      Island& is = islands[k];
+      const Island::PlanResult r = is.plan(world, geometries, t);
+      ++stats.island_plans;
+      if (r.inconsistent) ++stats.held_inconsistent;
+      for (std::uint32_t pair : r.released) {
+        PairSet::Pair& q = pairs.pair(pair);
+        q.held = false;
+        report("release", q.a, q.b, body(q.a).state.x_W, t);
+      }
+      for (std::uint32_t extra : split(k, t)) todo.push_back(extra);
+      schedule_island(k, t);
+    }
+    for (BodyId id : touched) {
+      if (body(id).is_dynamic()) refresh_broad_phase(id, t);
+    }
+    for (std::uint32_t index : pairs.collect_rebounds(touched)) rebound(index, t);
+  }
+
+  // Splits island k into the components its links connect; bodies no link holds leave it (free
+  // flight from their state at t). Returns the new islands (to be planned); island k keeps the
+  // component of its first link.
+  std::vector<std::uint32_t> split(std::uint32_t k, double t) {
+    std::vector<std::uint32_t> made;
+    Island& is = islands[k];
+    if (is.links.empty()) {
+      for (BodyId id : is.bodies) island_of[id.index] = -1;
+      release_slot(k);
+      return made;
+    }
+    // Union-find over the island's bodies.
+    std::vector<int> parent(is.bodies.size());
+    for (std::size_t n = 0; n < parent.size(); ++n) parent[n] = static_cast<int>(n);
+    auto find = [&](int x) {
+      while (parent[static_cast<std::size_t>(x)] != x) x = parent[static_cast<std::size_t>(x)];
+      return x;
+    };
+    std::vector<bool> linked(is.bodies.size(), false);
+    for (const HeldLink& link : is.links) {
+      const int m = is.index_of(link.mover), s = is.index_of(link.support);
+      if (m >= 0) linked[static_cast<std::size_t>(m)] = true;
+      if (s >= 0) linked[static_cast<std::size_t>(s)] = true;
+      if (m >= 0 && s >= 0) parent[static_cast<std::size_t>(find(m))] = find(s);
+    }
+    const int root = [&] {
+      const HeldLink& first = is.links.front();
+      const int m = is.index_of(first.mover);
+      return find(m >= 0 ? m : is.index_of(first.support));
+    }();
+    std::vector<BodyId> keep;
+    std::vector<std::pair<int, BodyId>> others;
+    for (std::size_t n = 0; n < is.bodies.size(); ++n) {
+      const BodyId id = is.bodies[n];
+      if (!linked[n]) {
+        island_of[id.index] = -1;
+        body(id).state = is.state_at(n, t);
+      } else if (find(static_cast<int>(n)) == root) {
+        keep.push_back(id);
+      } else {
+        others.emplace_back(find(static_cast<int>(n)), id);
+      }
+    }
+    if (others.empty() && keep.size() == is.bodies.size()) return made;
+    std::sort(others.begin(), others.end(), [](const auto& x, const auto& y) {
+      return x.first < y.first || (x.first == y.first && x.second < y.second);
+    });
+    std::vector<HeldLink> links = std::move(is.links);
+    for (BodyId id : is.bodies) commit(id, t);
+    is.bodies = keep;
+    is.links.clear();
+    std::map<int, std::uint32_t> slot_of;
+    for (const auto& [component, id] : others) {
+      auto it = slot_of.find(component);
+      if (it == slot_of.end()) {
+        const std::uint32_t slot = new_slot();
+        it = slot_of.emplace(component, slot).first;
+        made.push_back(slot);
+      }
+      islands[it->second].bodies.push_back(id);
+      island_of[id.index] = static_cast<int>(it->second);
+    }
+    Island& kept = islands[k];  // (new_slot may have moved the vector)
+    for (const HeldLink& link : links) {
+      const BodyId d = body(link.mover).is_dynamic() ? link.mover : link.support;
+      const int slot = island_of[d.index];
+      islands[static_cast<std::size_t>(slot)].links.push_back(link);
+    }
+    (void)kept;
+    return made;
+  }
+
+  void schedule_island(std::uint32_t i, double t) {
+    if (!island_live[i]) return;
+    Island& is = islands[i];
+    if (is.motion == Island::Motion::kRest && !is.links.empty()) {
+      ++stats.rests;
+      report("rest", is.links.front().mover, is.links.front().support,
+             body(is.bodies.front()).state.x_W, t);
+    }
+    if (!std::isfinite(is.t_end)) {
+      if (island_events[i] != EventQueue::kNoEvent) queue.erase(island_events[i]);
+      island_events[i] = EventQueue::kNoEvent;
+      return;
+    }
+    Event e;
+    e.t = std::max(is.t_end, t);
+    e.kind = EventKind::kIsland;
+    e.a = *std::min_element(is.bodies.begin(), is.bodies.end());
+    e.owner = i;
+    if (island_events[i] == EventQueue::kNoEvent) {
+      island_events[i] = queue.push(e);
+    } else {
+      queue.update(island_events[i], e);
+    }
+  }
+
+  // Island i's motion reached its next event at time t: a mode change.
+  void island_event(std::uint32_t i, double t) {
+    island_events[i] = EventQueue::kNoEvent;
+    Island& is = islands[i];
+    for (BodyId id : is.bodies) commit(id, t);
+    ++stats.mode_changes;
+    const IslandEvent ev = is.event;
+    if (ev.link >= 0 && ev.link < static_cast<int>(is.links.size())) {
+      const HeldLink& link = is.links[static_cast<std::size_t>(ev.link)];
+      if (ev.kind != IslandEvent::Kind::kSegmentEnd) {
+        report(to_string(ev.kind), std::min(link.mover, link.support),
+               std::max(link.mover, link.support), body(link.mover).state.x_W, t);
+      }
+      if (ev.kind == IslandEvent::Kind::kLanding) {
+        // Another part of the body reaches the plane: a collision, which the pair's check finds.
+        pairs.pair(link.pair).held = false;
+        is.links.erase(is.links.begin() + ev.link);
+      }
+    }
+    // A motion that keeps ending where it began makes no progress: let its contacts go.
+    if (t <= is.last_event_t) {
+      if (++is.stalls > 50) {
+        ++stats.stalled_islands;
+        for (const HeldLink& link : is.links) pairs.pair(link.pair).held = false;
+        is.links.clear();
+      }
+    } else {
+      is.stalls = 0;
+    }
+    is.last_event_t = t;
+    replan(i, t);
   }
 
   void schedule_sample() {
@@ -362,6 +720,8 @@ struct Simulation::Impl {
   void start() {
     validate_start();
     const auto n = static_cast<std::uint32_t>(world.bodies.size());
+    island_of.assign(n, -1);
+    for (std::uint32_t i = 0; i < n; ++i) geometries.push_back(&pairs.geometry(BodyId{i}));
     for (std::uint32_t i = 0; i < n; ++i) refresh_broad_phase(BodyId{i}, 0.0);
     for (std::uint32_t index = 0; index < pairs.slots(); ++index) {
       if (pairs.pair(index).live) rebound(index, 0.0);  // each pair once
@@ -369,7 +729,8 @@ struct Simulation::Impl {
     schedule_sample();
   }
 
-  StepResult step(double t_end, SimulationObserver* observer) {
+  StepResult step(double t_end, SimulationObserver* step_observer) {
+    observer = step_observer;
     StepResult result;
     if (queue.empty() || !(queue.top().t <= t_end)) {
       result.done = true;
@@ -393,6 +754,12 @@ struct Simulation::Impl {
         if (result.collision && observer) observer->on_collision(*result.collision);
         break;
       }
+      case EventKind::kIsland:
+        PALPABLE_CHECK(
+            e.owner < islands.size() && island_live[e.owner] && island_events[e.owner] == id,
+            "island event without its island");
+        island_event(e.owner, e.t);
+        break;
       case EventKind::kHorizon:
         pairs.body(e.a).horizon_event = EventQueue::kNoEvent;
         commit(e.a, e.t);

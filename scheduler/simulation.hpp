@@ -49,6 +49,21 @@ struct SimulationStats {
   std::uint64_t pairs_created = 0;       // pairs entering the broad phase
   std::uint64_t max_pairs = 0;           // most pairs tracked at once
   std::uint64_t box_tests = 0;           // swept-box overlap tests made by the broad phase
+  // Persistent contact (scheduler/island.hpp).
+  std::uint64_t holds = 0;              // contacts handed over to the hold
+  std::uint64_t mode_changes = 0;       // island events (stick, slip, lift-off, tip, ...)
+  std::uint64_t island_plans = 0;       // contact problems solved to plan a motion
+  std::uint64_t rests = 0;              // islands put at rest
+  std::uint64_t held_inconsistent = 0;  // contact problems without a solution (let go)
+  std::uint64_t stalled_islands = 0;    // islands that stopped making progress (let go)
+};
+
+// A held contact changing how it behaves, at its exact instant (persistent contact model).
+struct ModeChange {
+  double t = 0.0;
+  const char* kind = "";    // hold, stick, slip, lift_off, tip, landing, rest, release, ...
+  BodyId a, b;              // the pair (a < b)
+  Vec3 p_W = Vec3::Zero();  // where: the contact's reference point
 };
 
 // Receives what a run produces. Default implementations ignore everything.
@@ -58,6 +73,7 @@ class SimulationObserver {
   // Every body's state at t = k x interval (extrapolated; ids index the world's bodies).
   virtual void on_sample(double /*t*/, const std::vector<BodyState>& /*states*/) {}
   virtual void on_collision(const CollisionRecord& /*record*/) {}
+  virtual void on_mode_change(const ModeChange& /*change*/) {}
 };
 
 struct SimulationOptions {

@@ -1,0 +1,645 @@
+#include "impulse/contact_dynamics.hpp"
+
+#include "impulse/contact_torque.hpp"
+
+#include <Eigen/Dense>
+#include <Eigen/QR>
+
+#include <algorithm>
+#include <cmath>
+
+namespace palpable {
+
+namespace {
+
+using Vec6 = Eigen::Matrix<double, 6, 1>;
+using MatX = Eigen::MatrixXd;
+using VecX = Eigen::VectorXd;
+
+// The motion of one side of a contact at this instant: velocities, and for a known body its
+// accelerations (an unknown body's are what the problem solves for).
+struct Side {
+  int body = -1;  // index of a HeldBody, -1: known
+  Vec3 x = Vec3::Zero(), v = Vec3::Zero(), w = Vec3::Zero();
+  Vec3 a = Vec3::Zero(), alpha = Vec3::Zero();  // known sides only
+};
+
+Side mover_side(const HeldContact& c, const std::vector<HeldBody>& bodies) {
+  Side s;
+  s.body = c.mover;
+  if (c.mover >= 0) {
+    const HeldBody& b = bodies[static_cast<std::size_t>(c.mover)];
+    s.x = b.x_W, s.v = b.v_W, s.w = b.w_W;
+  } else {
+    s.x = c.mover_known.x_W, s.v = c.mover_known.v_W, s.w = c.mover_known.w_W;
+    s.a = c.mover_known.a_W, s.alpha = c.mover_known.alpha_W;
+  }
+  return s;
+}
+
+Side support_side(const HeldContact& c, const std::vector<HeldBody>& bodies) {
+  Side s;
+  s.body = c.support;
+  if (c.support >= 0) {
+    const HeldBody& b = bodies[static_cast<std::size_t>(c.support)];
+    s.x = b.x_W, s.v = b.v_W, s.w = b.w_W;
+  } else {
+    s.x = c.support_known.x_W, s.v = c.support_known.v_W, s.w = c.support_known.w_W;
+    s.a = c.support_known.a_W, s.alpha = c.support_known.alpha_W;
+  }
+  return s;
+}
+
+// One row of the problem: a scalar relative acceleration that must vanish, as J . acc + bias,
+// and the wrench its multiplier applies. Up to two bodies (mover, support) take part.
+struct Row {
+  int contact = 0;
+  int body[2] = {-1, -1};
+  Vec6 J[2] = {Vec6::Zero(), Vec6::Zero()};  // on (a, alpha) of body[k]
+  Vec6 W[2] = {Vec6::Zero(), Vec6::Zero()};  // (force, torque) per unit multiplier
+  double bias = 0.0;
+};
+
+Vec6 wrench(const Vec3& f, const Vec3& tau) {
+  Vec6 w;
+  w << f, tau;
+  return w;
+}
+
+// The kinematics of a contact at this instant.
+struct Kinematics {
+  Side m, s;
+  Vec3 r_m, r_s;  // contact point from each centre
+  Vec3 slip;      // s = u_mover - u_support at the contact
+  Vec3 n_dot;     // dn/dt = w_support x n
+  // ds/dt = Jm (a_m, alpha_m) + Js (a_s, alpha_s) + bias (3 x 6 each).
+  Eigen::Matrix<double, 3, 6> Jm, Js;
+  Vec3 slip_bias;
+  Vec3 dw;  // relative angular velocity
+};
+
+Kinematics kinematics(const HeldContact& c, const std::vector<HeldBody>& bodies) {
+  Kinematics k;
+  k.m = mover_side(c, bodies);
+  k.s = support_side(c, bodies);
+  k.r_m = c.c_W - k.m.x;
+  k.r_s = c.c_W - k.s.x;
+  const Vec3 u_m = k.m.v + k.m.w.cross(k.r_m);
+  const Vec3 u_s = k.s.v + k.s.w.cross(k.r_s);
+  k.slip = u_m - u_s;
+  k.n_dot = k.s.w.cross(c.n_W);
+  k.dw = k.m.w - k.s.w;
+  const Mat3 I = Mat3::Identity();
+  // The mover's contact point: a material point of a polyhedron, whose acceleration is
+  // a + alpha x r + w x (w x r); or a sphere's lowest point c - R n, which rolls over its
+  // surface: d/dt (v + w x (-R n)) = a + R n x alpha - R w x dn/dt.
+  Vec3 p_dot;  // velocity of the contact point itself
+  k.Jm.leftCols<3>() = I;
+  if (c.sphere_radius > 0.0) {
+    k.Jm.rightCols<3>() = c.sphere_radius * skew(c.n_W);
+    k.slip_bias = -c.sphere_radius * k.m.w.cross(k.n_dot);
+    p_dot = k.m.v - c.sphere_radius * k.n_dot;
+  } else {
+    k.Jm.rightCols<3>() = -skew(k.r_m);
+    k.slip_bias = k.m.w.cross(k.m.w.cross(k.r_m));
+    p_dot = u_m;
+  }
+  // The support's surface point under the moving contact point: its material acceleration, plus
+  // w_s x (p_dot - u_s) for the point moving over a turning surface.
+  k.Js.leftCols<3>() = -I;
+  k.Js.rightCols<3>() = skew(k.r_s);
+  k.slip_bias -= k.s.w.cross(k.s.w.cross(k.r_s)) + k.s.w.cross(p_dot - u_s);
+  // Known sides: their accelerations go into the bias.
+  if (k.m.body < 0) k.slip_bias += k.Jm.leftCols<3>() * k.m.a + k.Jm.rightCols<3>() * k.m.alpha;
+  if (k.s.body < 0) k.slip_bias += k.Js.leftCols<3>() * k.s.a + k.Js.rightCols<3>() * k.s.alpha;
+  return k;
+}
+
+Vec3 in_plane(const HeldContact& c, const Vec2& v) {
+  return v.x() * c.t1_W + v.y() * c.t2_W;
+}
+Vec2 plane_coords(const HeldContact& c, const Vec3& v) {
+  return Vec2(v.dot(c.t1_W), v.dot(c.t2_W));
+}
+
+// The length over which a contact's relative spin about n is measured: the patch's mean radius
+// (r_eff), a segment's length, a sphere's radius.
+double turning_size(const HeldContact& c) {
+  switch (c.patch) {
+    case PatchKind::kPolygon: return c.friction > 0.0 ? c.torsion_arm / c.friction : 0.0;
+    case PatchKind::kSegment: return c.segment_hi - c.segment_lo;
+    case PatchKind::kPoint: return c.sphere_radius;
+  }
+  return 0.0;
+}
+
+// The axis of a segment's held rocking, m = n x s, and its rate.
+Vec3 segment_axis(const HeldContact& c) {
+  return c.n_W.cross(c.segment_W);
+}
+Vec3 segment_axis_rate(const HeldContact& c, const Kinematics& k) {
+  return k.n_dot.cross(c.segment_W) + c.n_W.cross(k.m.w.cross(c.segment_W));
+}
+
+class Assembly {
+ public:
+  Assembly(const std::vector<HeldBody>& bodies, const std::vector<HeldContact>& contacts,
+           bool velocity_level = false)
+      : bodies_(bodies), contacts_(contacts), velocity_level_(velocity_level) {
+    for (std::size_t i = 0; i < contacts.size(); ++i) {
+      if (contacts[i].active) add_contact(static_cast<int>(i));
+    }
+  }
+
+  // The velocity-level problem: rows for each active contact's normal and rocking, and for its
+  // friction, torsion and rolling where they are still; impulses of least norm that zero them.
+  static double project(std::vector<HeldBody>& bodies, const std::vector<HeldContact>& contacts,
+                        double still) {
+    std::vector<HeldContact> held = contacts;
+    const std::vector<HeldContactMotion> now = held_velocities(bodies, contacts);
+    for (std::size_t i = 0; i < held.size(); ++i) {
+      HeldContact& c = held[i];
+      const HeldContactMotion& m = now[i];
+      // Only what is still is held at the velocity level; what slides keeps its motion (no
+      // sliding couplings here: the impulses are small by construction).
+      c.sticks = plane_coords(c, m.slip_W).norm() <= still;
+      c.spin_sticks = std::abs(m.dw_W.dot(c.n_W)) * turning_size(c) <= still;
+      c.roll_sticks = plane_coords(c, m.dw_W).norm() * c.sphere_radius <= still;
+      if (!c.sticks) c.friction = 0.0;
+      if (!c.spin_sticks) c.torsion_arm = 0.0;
+      if (!c.roll_sticks) c.rolling_resistance = 0.0;
+    }
+    Assembly a(bodies, held, /*velocity_level=*/true);
+    const Eigen::Index m = static_cast<Eigen::Index>(a.rows_.size());
+    if (m == 0) return 0.0;
+    MatX A(m, m);
+    VecX rhs(m);
+    for (Eigen::Index i = 0; i < m; ++i) {
+      rhs(i) = -a.rows_[static_cast<std::size_t>(i)].bias;
+      for (Eigen::Index j = 0; j < m; ++j) A(i, j) = a.coupling(i, j);
+    }
+    const VecX p = Eigen::CompleteOrthogonalDecomposition<MatX>(A).solve(rhs);
+    if (!p.allFinite()) return 0.0;
+    double before = 0.0, after = 0.0;
+    for (const HeldBody& b : bodies) before += kinetic(b);
+    for (Eigen::Index j = 0; j < m; ++j) {
+      const Row& r = a.rows_[static_cast<std::size_t>(j)];
+      for (int q = 0; q < 2; ++q) {
+        if (r.body[q] < 0) continue;
+        HeldBody& b = bodies[static_cast<std::size_t>(r.body[q])];
+        const Vec6 dv = p(j) * a.apply_inverse_mass(r.body[q], r.W[q]);
+        b.v_W += dv.head<3>();
+        b.w_W += dv.tail<3>();
+      }
+    }
+    for (const HeldBody& b : bodies) after += kinetic(b);
+    return after - before;
+  }
+
+  HeldSolution solve() const {
+    HeldSolution out;
+    const std::size_t nb = bodies_.size();
+    out.a_W.assign(nb, Vec3::Zero());
+    out.alpha_W.assign(nb, Vec3::Zero());
+    // Free accelerations: gravity, and the gyroscopic term I alpha = -w x I w.
+    std::vector<Vec6> free(nb);
+    for (std::size_t b = 0; b < nb; ++b) {
+      const HeldBody& body = bodies_[b];
+      free[b] << body.force_W / body.mass,
+          body.inv_inertia_W * (-body.w_W.cross(body.inertia_W * body.w_W));
+    }
+    const Eigen::Index m = static_cast<Eigen::Index>(rows_.size());
+    VecX lambda = VecX::Zero(m);
+    if (m > 0) {
+      MatX A = MatX::Zero(m, m);
+      VecX rhs(m);
+      for (Eigen::Index i = 0; i < m; ++i) {
+        const Row& ri = rows_[static_cast<std::size_t>(i)];
+        double value = ri.bias;
+        for (int p = 0; p < 2; ++p) {
+          if (ri.body[p] >= 0) value += ri.J[p].dot(free[static_cast<std::size_t>(ri.body[p])]);
+        }
+        rhs(i) = -value;
+        for (Eigen::Index j = 0; j < m; ++j) A(i, j) = coupling(i, j);
+      }
+      if (!A.allFinite() || !rhs.allFinite()) {
+        out.status = HeldStatus::kNonFinite;
+        return out;
+      }
+      Eigen::CompleteOrthogonalDecomposition<MatX> cod(A);
+      lambda = cod.solve(rhs);
+      const double scale = rhs.norm() + A.norm() * lambda.norm();
+      out.residual = scale > 0.0 ? (A * lambda - rhs).norm() / scale : 0.0;
+      if (!lambda.allFinite()) {
+        out.status = HeldStatus::kNonFinite;
+        return out;
+      }
+      if (out.residual > 1e-8) out.status = HeldStatus::kInconsistent;
+    }
+    // Accelerations.
+    std::vector<Vec6> acc = free;
+    for (Eigen::Index j = 0; j < m; ++j) {
+      const Row& r = rows_[static_cast<std::size_t>(j)];
+      for (int p = 0; p < 2; ++p) {
+        if (r.body[p] >= 0) {
+          acc[static_cast<std::size_t>(r.body[p])] +=
+              lambda(j) * apply_inverse_mass(r.body[p], r.W[p]);
+        }
+      }
+    }
+    for (std::size_t b = 0; b < nb; ++b) {
+      out.a_W[b] = acc[b].head<3>();
+      out.alpha_W[b] = acc[b].tail<3>();
+    }
+    // Forces and relative motion per contact.
+    out.forces.assign(contacts_.size(), HeldContactForces{});
+    out.motion.assign(contacts_.size(), HeldContactMotion{});
+    for (std::size_t i = 0; i < contacts_.size(); ++i) {
+      const HeldContact& c = contacts_[i];
+      const Kinematics k = kinematics(c, bodies_);
+      HeldContactMotion& mo = out.motion[i];
+      mo.slip_W = k.slip;
+      mo.dw_W = k.dw;
+      Vec6 am = Vec6::Zero(), as = Vec6::Zero();
+      if (k.m.body >= 0) am = acc[static_cast<std::size_t>(k.m.body)];
+      if (k.s.body >= 0) as = acc[static_cast<std::size_t>(k.s.body)];
+      mo.slip_rate_W = k.slip_bias;
+      if (k.m.body >= 0) mo.slip_rate_W += k.Jm * am;
+      if (k.s.body >= 0) mo.slip_rate_W += k.Js * as;
+      const Vec3 alpha_m = k.m.body >= 0 ? Vec3(am.tail<3>()) : k.m.alpha;
+      const Vec3 alpha_s = k.s.body >= 0 ? Vec3(as.tail<3>()) : k.s.alpha;
+      mo.dalpha_W = alpha_m - alpha_s;
+      if (!c.active) continue;
+      HeldContactForces& f = out.forces[i];
+      const Layout& l = layout_[i];
+      f.normal = lambda(l.normal);
+      if (c.patch == PatchKind::kPolygon) {
+        f.moment = Vec2(lambda(l.moment), lambda(l.moment + 1));
+      } else if (c.patch == PatchKind::kSegment) {
+        // The moment about m = n x s, reported in (t1, t2).
+        const Vec3 M = lambda(l.moment) * segment_axis(c);
+        f.moment = Vec2(M.dot(c.t1_W), M.dot(c.t2_W));
+      }
+      if (l.friction >= 0) {
+        f.friction = Vec2(lambda(l.friction), lambda(l.friction + 1));
+      } else if (!c.sticks) {
+        f.friction = -c.friction * f.normal * c.slip_dir;
+      }
+      if (l.torsion >= 0) {
+        f.torsion = lambda(l.torsion);
+      } else if (!c.spin_sticks) {
+        f.torsion = -c.torsion_arm * f.normal * c.spin_sign;
+      }
+      if (l.rolling >= 0) {
+        f.rolling = Vec2(lambda(l.rolling), lambda(l.rolling + 1));
+      } else if (!c.roll_sticks && c.rolling_resistance > 0.0) {
+        f.rolling = -c.rolling_resistance * f.normal * c.roll_dir;
+      }
+      // Centre of pressure c + n x M / N.
+      if (f.normal > 0.0) f.centre_of_pressure = Vec2(-f.moment.y(), f.moment.x()) / f.normal;
+    }
+    return out;
+  }
+
+ private:
+  static double kinetic(const HeldBody& b) {
+    return 0.5 * b.mass * b.v_W.squaredNorm() + 0.5 * b.w_W.dot(b.inertia_W * b.w_W);
+  }
+  // A_ij: row i's value per unit multiplier of row j.
+  double coupling(Eigen::Index i, Eigen::Index j) const {
+    const Row& ri = rows_[static_cast<std::size_t>(i)];
+    const Row& rj = rows_[static_cast<std::size_t>(j)];
+    double sum = 0.0;
+    for (int p = 0; p < 2; ++p) {
+      for (int q = 0; q < 2; ++q) {
+        if (ri.body[p] >= 0 && ri.body[p] == rj.body[q]) {
+          sum += ri.J[p].dot(apply_inverse_mass(ri.body[p], rj.W[q]));
+        }
+      }
+    }
+    return sum;
+  }
+
+  struct Layout {
+    Eigen::Index normal = -1, moment = -1, friction = -1, torsion = -1, rolling = -1;
+  };
+
+  Vec6 apply_inverse_mass(int body, const Vec6& w) const {
+    const HeldBody& b = bodies_[static_cast<std::size_t>(body)];
+    Vec6 out;
+    out << w.head<3>() / b.mass, b.inv_inertia_W * w.tail<3>();
+    return out;
+  }
+
+  // A row acting on the mover with wrench (f, tau) at the contact (tau about the mover's centre)
+  // and on the support with the opposite (about its own centre).
+  Row make_row(int contact, const Kinematics& k) const {
+    Row r;
+    r.contact = contact;
+    r.body[0] = k.m.body;
+    r.body[1] = k.s.body;
+    return r;
+  }
+  // Force f applied at the contact point.
+  static void add_force(Row& r, const Kinematics& k, const Vec3& f) {
+    r.W[0] += wrench(f, k.r_m.cross(f));
+    r.W[1] -= wrench(f, k.r_s.cross(f));
+  }
+  static void add_torque(Row& r, const Vec3& tau) {
+    r.W[0] += wrench(Vec3::Zero(), tau);
+    r.W[1] -= wrench(Vec3::Zero(), tau);
+  }
+  // Row value: d . ds/dt + d_dot . s (a linear relative-acceleration row along d).
+  // At the velocity level the same J gives d . s, and the bias is the row's present value.
+  void linear_rows_value(Row& r, const Kinematics& k, const Vec3& d, const Vec3& d_dot) const {
+    r.J[0] = (d.transpose() * k.Jm).transpose();
+    r.J[1] = (d.transpose() * k.Js).transpose();
+    r.bias = velocity_level_ ? d.dot(k.slip) : d.dot(k.slip_bias) + d_dot.dot(k.slip);
+  }
+  // Row value: a . d(dw)/dt + a_dot . dw (a relative angular-acceleration row about a).
+  void angular_row_value(Row& r, const Kinematics& k, const Vec3& a, const Vec3& a_dot) const {
+    r.J[0] = wrench(Vec3::Zero(), a);
+    r.J[1] = wrench(Vec3::Zero(), -a);
+    if (velocity_level_) {
+      r.bias = a.dot(k.dw);
+      return;
+    }
+    r.bias = a_dot.dot(k.dw);
+    if (k.m.body < 0) r.bias += a.dot(k.m.alpha);
+    if (k.s.body < 0) r.bias -= a.dot(k.s.alpha);
+  }
+
+  void add_contact(int i) {
+    const HeldContact& c = contacts_[static_cast<std::size_t>(i)];
+    const Kinematics k = kinematics(c, bodies_);
+    Layout& l = layout_[static_cast<std::size_t>(i)];
+    const Vec3 s_hat = c.slip_dir.x() * c.t1_W + c.slip_dir.y() * c.t2_W;
+    // Rocking axes held by the patch, and their rates.
+    std::vector<std::pair<Vec3, Vec3>> rocking;
+    if (c.patch == PatchKind::kPolygon) {
+      rocking = {{c.t1_W, k.s.w.cross(c.t1_W)}, {c.t2_W, k.s.w.cross(c.t2_W)}};
+    } else if (c.patch == PatchKind::kSegment) {
+      rocking = {{segment_axis(c), segment_axis_rate(c, k)}};
+    }
+    // Normal: force n at c, plus the sliding couplings that scale with N.
+    {
+      Row r = make_row(i, k);
+      linear_rows_value(r, k, c.n_W, k.n_dot);
+      add_force(r, k, c.n_W);
+      if (!c.sticks && c.friction > 0.0) add_force(r, k, -c.friction * s_hat);
+      if (!c.spin_sticks && c.torsion_arm > 0.0)
+        add_torque(r, -c.torsion_arm * c.spin_sign * c.n_W);
+      if (!c.roll_sticks && c.rolling_resistance > 0.0) {
+        add_torque(r, -c.rolling_resistance * (c.roll_dir.x() * c.t1_W + c.roll_dir.y() * c.t2_W));
+      }
+      l.normal = push(r);
+    }
+    // Pressure moments; sliding friction acts at the centre of pressure c + n x M / N, so each
+    // moment component also turns the friction force: -mu (n x a) x s_hat per unit.
+    for (std::size_t j = 0; j < rocking.size(); ++j) {
+      Row r = make_row(i, k);
+      angular_row_value(r, k, rocking[j].first, rocking[j].second);
+      add_torque(r, rocking[j].first);
+      if (!c.sticks && c.friction > 0.0) {
+        add_torque(r, -c.friction * c.n_W.cross(rocking[j].first).cross(s_hat));
+      }
+      const Eigen::Index index = push(r);
+      if (j == 0) l.moment = index;
+    }
+    if (c.sticks && c.friction > 0.0) {
+      for (const Vec3* t : {&c.t1_W, &c.t2_W}) {
+        Row r = make_row(i, k);
+        linear_rows_value(r, k, *t, k.s.w.cross(*t));
+        add_force(r, k, *t);
+        const Eigen::Index index = push(r);
+        if (t == &c.t1_W) l.friction = index;
+      }
+    }
+    if (c.spin_sticks && c.torsion_arm > 0.0) {
+      Row r = make_row(i, k);
+      angular_row_value(r, k, c.n_W, k.n_dot);
+      add_torque(r, c.n_W);
+      l.torsion = push(r);
+    }
+    if (c.patch == PatchKind::kPoint && c.roll_sticks && c.rolling_resistance > 0.0) {
+      for (const Vec3* t : {&c.t1_W, &c.t2_W}) {
+        Row r = make_row(i, k);
+        angular_row_value(r, k, *t, k.s.w.cross(*t));
+        add_torque(r, *t);
+        const Eigen::Index index = push(r);
+        if (t == &c.t1_W) l.rolling = index;
+      }
+    }
+  }
+
+  Eigen::Index push(const Row& r) {
+    rows_.push_back(r);
+    return static_cast<Eigen::Index>(rows_.size() - 1);
+  }
+
+  const std::vector<HeldBody>& bodies_;
+  const std::vector<HeldContact>& contacts_;
+  bool velocity_level_ = false;
+  std::vector<Row> rows_;
+  std::vector<Layout> layout_ = std::vector<Layout>(contacts_.size());
+};
+
+}  // namespace
+
+std::string_view to_string(HeldStatus status) {
+  switch (status) {
+    case HeldStatus::kOk: return "ok";
+    case HeldStatus::kInconsistent: return "inconsistent";
+    case HeldStatus::kNonFinite: return "non-finite";
+  }
+  return "unknown";
+}
+
+HeldSolution solve_held(const std::vector<HeldBody>& bodies,
+                        const std::vector<HeldContact>& contacts) {
+  return Assembly(bodies, contacts).solve();
+}
+
+std::vector<HeldContactMotion> held_velocities(const std::vector<HeldBody>& bodies,
+                                               const std::vector<HeldContact>& contacts) {
+  std::vector<HeldContactMotion> out(contacts.size());
+  for (std::size_t i = 0; i < contacts.size(); ++i) {
+    const Kinematics k = kinematics(contacts[i], bodies);
+    out[i].slip_W = k.slip;
+    out[i].dw_W = k.dw;
+  }
+  return out;
+}
+
+void set_torsion_arm(HeldContact& c) {
+  switch (c.patch) {
+    case PatchKind::kPoint: c.torsion_arm = c.spinning_resistance; return;
+    case PatchKind::kSegment:
+      c.torsion_arm = c.friction * 0.25 * (c.segment_hi - c.segment_lo);
+      return;
+    case PatchKind::kPolygon: {
+      std::vector<Vec3> patch_W;
+      for (const Vec2& p : c.polygon) patch_W.push_back(c.c_W + in_plane(c, p));
+      c.torsion_arm = c.friction * mean_distance_over_patch(patch_W, c.n_W, c.c_W);
+      return;
+    }
+  }
+}
+
+void reduce_patch(HeldContact& c, int edge) {
+  if (c.patch == PatchKind::kPolygon) {
+    const std::size_t n = c.polygon.size();
+    const Vec2 p0 = c.polygon[static_cast<std::size_t>(edge) % n];
+    const Vec2 p1 = c.polygon[(static_cast<std::size_t>(edge) + 1) % n];
+    const double length = (p1 - p0).norm();
+    c.c_W += in_plane(c, 0.5 * (p0 + p1));
+    c.segment_W = in_plane(c, (p1 - p0) / length);
+    c.segment_lo = -0.5 * length;
+    c.segment_hi = 0.5 * length;
+    c.polygon.clear();
+    c.patch = PatchKind::kSegment;
+  } else if (c.patch == PatchKind::kSegment) {
+    c.c_W += (edge == 0 ? c.segment_lo : c.segment_hi) * c.segment_W;
+    c.patch = PatchKind::kPoint;
+  }
+  set_torsion_arm(c);
+}
+
+double project_held_velocities(std::vector<HeldBody>& bodies,
+                               const std::vector<HeldContact>& contacts, double still) {
+  return Assembly::project(bodies, contacts, still);
+}
+
+HeldViolation worst_violation(const std::vector<HeldContact>& contacts, const HeldSolution& s,
+                              double tolerance) {
+  HeldViolation worst;
+  // Every inequality is measured in newtons (moments over the patch size), relative to scale.
+  double scale = 0.0;
+  for (const HeldContactForces& f : s.forces) scale = std::max(scale, std::abs(f.normal));
+  if (!(scale > 0.0)) scale = 1.0;
+  auto consider = [&](HeldViolation::Kind kind, int contact, int edge, double excess) {
+    const double amount = excess / scale;
+    if (amount > tolerance && amount > worst.amount) {
+      worst.kind = kind;
+      worst.contact = contact;
+      worst.edge = edge;
+      worst.amount = amount;
+    }
+  };
+  // Lift-off first: a contact that pulls makes every other condition of it meaningless.
+  for (std::size_t i = 0; i < contacts.size(); ++i) {
+    if (contacts[i].active) {
+      consider(HeldViolation::Kind::kLiftOff, static_cast<int>(i), -1, -s.forces[i].normal);
+    }
+  }
+  if (worst.kind != HeldViolation::Kind::kNone) return worst;
+  for (std::size_t i = 0; i < contacts.size(); ++i) {
+    const HeldContact& c = contacts[i];
+    if (!c.active) continue;
+    const HeldContactForces& f = s.forces[i];
+    const int ci = static_cast<int>(i);
+    const double N = std::max(f.normal, 0.0);
+    if (c.patch == PatchKind::kPolygon) {
+      // N (d - p0) . inward >= 0, with N d = (-M2, M1).
+      const Vec2 Nd(-f.moment.y(), f.moment.x());
+      const std::size_t n = c.polygon.size();
+      for (std::size_t e = 0; e < n; ++e) {
+        const Vec2& p0 = c.polygon[e];
+        const Vec2& p1 = c.polygon[(e + 1) % n];
+        const Vec2 edge = p1 - p0;
+        const Vec2 inward = Vec2(-edge.y(), edge.x()) / edge.norm();
+        const double size = (p1 - p0).norm() + p0.norm();
+        consider(HeldViolation::Kind::kTip, ci, static_cast<int>(e),
+                 -inward.dot(Nd - N * p0) / (size > 0.0 ? size : 1.0));
+      }
+    } else if (c.patch == PatchKind::kSegment) {
+      // The centre of pressure along s: -M_m / N, within [lo, hi].
+      const double Mm = in_plane(c, f.moment).dot(segment_axis(c));
+      const double size = c.segment_hi - c.segment_lo;
+      consider(HeldViolation::Kind::kTip, ci, 0, (N * c.segment_lo + Mm) / size);
+      consider(HeldViolation::Kind::kTip, ci, 1, (-Mm - N * c.segment_hi) / size);
+    }
+    if (c.sticks && c.friction > 0.0) {
+      consider(HeldViolation::Kind::kSlip, ci, -1, f.friction.norm() - c.friction * N);
+    }
+    if (c.spin_sticks && c.torsion_arm > 0.0) {
+      consider(HeldViolation::Kind::kSpin, ci, -1,
+               (std::abs(f.torsion) - c.torsion_arm * N) / c.torsion_arm);
+    }
+    if (c.patch == PatchKind::kPoint && c.roll_sticks && c.rolling_resistance > 0.0) {
+      consider(HeldViolation::Kind::kRoll, ci, -1,
+               (f.rolling.norm() - c.rolling_resistance * N) / c.rolling_resistance);
+    }
+  }
+  return worst;
+}
+
+HeldModes choose_held_modes(const std::vector<HeldBody>& bodies, std::vector<HeldContact>& contacts,
+                            double still, double tolerance) {
+  HeldModes out;
+  const std::vector<HeldContactMotion> now = held_velocities(bodies, contacts);
+  for (std::size_t i = 0; i < contacts.size(); ++i) {
+    HeldContact& c = contacts[i];
+    const HeldContactMotion& m = now[i];
+    const Vec2 slip = plane_coords(c, m.slip_W);
+    c.sticks = slip.norm() <= still;
+    if (!c.sticks) c.slip_dir = slip.normalized();
+    const double spin = m.dw_W.dot(c.n_W);
+    c.spin_sticks = std::abs(spin) * turning_size(c) <= still;
+    if (!c.spin_sticks) c.spin_sign = spin > 0.0 ? 1.0 : -1.0;
+    const Vec2 rolling = plane_coords(c, m.dw_W);
+    c.roll_sticks = rolling.norm() * std::max(c.sphere_radius, 1e-300) <= still;
+    if (!c.roll_sticks) c.roll_dir = rolling.normalized();
+  }
+  const int budget = 8 + 4 * static_cast<int>(contacts.size());
+  for (;;) {
+    out.solution = solve_held(bodies, contacts);
+    if (out.solution.status != HeldStatus::kOk) return out;
+    const HeldViolation v = worst_violation(contacts, out.solution, tolerance);
+    if (v.kind == HeldViolation::Kind::kNone) return out;
+    if (out.changes >= budget) {
+      out.converged = false;
+      return out;
+    }
+    ++out.changes;
+    HeldContact& c = contacts[static_cast<std::size_t>(v.contact)];
+    const HeldContactForces& f = out.solution.forces[static_cast<std::size_t>(v.contact)];
+    switch (v.kind) {
+      case HeldViolation::Kind::kNone: break;
+      case HeldViolation::Kind::kLiftOff:
+        c.active = false;
+        out.released.push_back(v.contact);
+        break;
+      case HeldViolation::Kind::kTip: reduce_patch(c, v.edge); break;
+      case HeldViolation::Kind::kSpin:
+        c.spin_sticks = false;
+        c.spin_sign = f.torsion > 0.0 ? -1.0 : 1.0;
+        break;
+      case HeldViolation::Kind::kRoll:
+        c.roll_sticks = false;
+        c.roll_dir = -f.rolling.normalized();
+        break;
+      case HeldViolation::Kind::kSlip: {
+        // Slip starts against the friction sticking needed; then the direction is refined until
+        // the sliding acceleration points along it (a fixed point: the unique direction).
+        c.sticks = false;
+        Vec2 dir = -f.friction.normalized();
+        for (int iteration = 0; iteration < 50; ++iteration) {
+          c.slip_dir = dir;
+          const HeldSolution trial = solve_held(bodies, contacts);
+          if (trial.status != HeldStatus::kOk) break;
+          const Vec2 rate =
+              plane_coords(c, trial.motion[static_cast<std::size_t>(v.contact)].slip_rate_W);
+          if (!(rate.norm() > 0.0)) break;
+          const Vec2 next = rate.normalized();
+          if (next.dot(dir) > 1.0 - 1e-15) break;
+          dir = next;
+        }
+        c.slip_dir = dir;
+        break;
+      }
+    }
+  }
+}
+
+}  // namespace palpable

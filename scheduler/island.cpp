@@ -1,0 +1,1012 @@
+#include "scheduler/island.hpp"
+
+#include "core/ballistic.hpp"
+#include "core/check.hpp"
+#include "core/convex_polygon.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace palpable {
+
+namespace {
+
+Mat3 rotation(const BodyState& s) {
+  return s.q_WM.toRotationMatrix();
+}
+
+bool is_sphere(const Body& b) {
+  return std::holds_alternative<Sphere>(*b.shape);
+}
+
+// The spherical-inertia test of the ballistic code: a sphere's orientation never matters.
+bool spherical_inertia(const Body& b, const Settings& settings) {
+  const Vec3& I = b.mass.principal_moments;
+  return I.z() - I.x() <= settings.inertia_symmetry_tolerance * I.z();
+}
+
+// The smallest t > 0 with c0 + c1 t + c2 t^2 / 2 = 0 crossing from positive to negative
+// (+inf if none): when a quantity that is positive now first becomes negative.
+double first_negative(double c0, double c1, double c2) {
+  if (c0 < 0.0) return 0.0;
+  double best = kInfinity;
+  auto consider = [&](double t) {
+    if (t > 0.0 && t < best) {
+      // Negative just after t: the derivative there is negative (or zero with c2 < 0).
+      const double slope = c1 + c2 * t;
+      if (slope < 0.0 || (slope == 0.0 && c2 < 0.0)) best = t;
+    }
+  };
+  if (c2 == 0.0) {
+    if (c1 < 0.0) consider(-c0 / c1);
+    return best;
+  }
+  const double disc = c1 * c1 - 2.0 * c2 * c0;
+  if (disc < 0.0) return best;
+  const double root = std::sqrt(disc);
+  // Both roots of c2/2 t^2 + c1 t + c0 without cancellation.
+  const double q = -(c1 + (c1 >= 0.0 ? root : -root));
+  if (q != 0.0) {
+    consider(q / c2);
+    consider(2.0 * c0 / q);
+  } else {
+    consider(0.0);
+  }
+  return best;
+}
+
+// A body's world inertia.
+Mat3 inertia_W(const Body& b, const Quat& q_WM) {
+  const Mat3 R = q_WM.toRotationMatrix();
+  return R * b.mass.inertia_M * R.transpose();
+}
+
+// The rotation exp([theta]x) as a quaternion.
+Quat rotation_quat(const Vec3& theta) {
+  const double angle = theta.norm();
+  if (angle == 0.0) return Quat::Identity();
+  return Quat(Eigen::AngleAxisd(angle, theta / angle));
+}
+
+}  // namespace
+
+const char* to_string(IslandEvent::Kind kind) {
+  switch (kind) {
+    case IslandEvent::Kind::kNone: return "none";
+    case IslandEvent::Kind::kSlipStop: return "stick";
+    case IslandEvent::Kind::kSpinStop: return "spin_stop";
+    case IslandEvent::Kind::kRollStop: return "roll_stop";
+    case IslandEvent::Kind::kSlipStart: return "slip";
+    case IslandEvent::Kind::kLiftOff: return "lift_off";
+    case IslandEvent::Kind::kTip: return "tip";
+    case IslandEvent::Kind::kLanding: return "landing";
+    case IslandEvent::Kind::kSegmentEnd: return "segment_end";
+  }
+  return "unknown";
+}
+
+std::optional<HeldLink> make_held_link(std::uint32_t pair, BodyId a, BodyId b,
+                                       const LinkSide& side_a, const LinkSide& side_b,
+                                       const DistanceResult& closest,
+                                       const ContactGeometry& geometry) {
+  const bool plane1 = geometry.unbounded1 || geometry.feature1.size() >= 3;
+  const bool plane2 = geometry.unbounded2 || geometry.feature2.size() >= 3;
+  if (!plane1 && !plane2) return std::nullopt;
+  // Body 2's plane faces body 1 along n; body 1's faces body 2 along -n. Face on face: the
+  // support is the fixed or kinematic body, or body 2.
+  bool support_is_b = plane2;
+  if (plane1 && plane2 && side_b.body.is_dynamic() && !side_a.body.is_dynamic()) {
+    support_is_b = false;
+  }
+  const LinkSide& mover = support_is_b ? side_a : side_b;
+  const LinkSide& support = support_is_b ? side_b : side_a;
+  if (!mover.body.is_dynamic()) return std::nullopt;  // a halfspace or a fixed body never moves
+  HeldLink link;
+  link.pair = pair;
+  link.mover = support_is_b ? a : b;
+  link.support = support_is_b ? b : a;
+  link.support_piece = support_is_b ? closest.piece2 : closest.piece1;
+  const Vec3 n_W = support_is_b ? closest.n_W : Vec3(-closest.n_W);
+  const Vec3& plane_point_W = support_is_b ? closest.p2_W : closest.p1_W;
+  const Mat3 R_S = rotation(support.state);
+  const Mat3 R_M = rotation(mover.state);
+  link.normal_S = (R_S.transpose() * n_W).normalized();
+  link.point_S = R_S.transpose() * (plane_point_W - support.state.x_W);
+  link.t1_S = link.normal_S.unitOrthogonal();
+  link.gap = std::max(closest.distance, 0.0);
+  const std::vector<Vec3>& support_feature = support_is_b ? geometry.feature2 : geometry.feature1;
+  const bool unbounded = support_is_b ? geometry.unbounded2 : geometry.unbounded1;
+  if (!unbounded) {
+    for (const Vec3& p : support_feature) {
+      link.support_face_S.push_back(R_S.transpose() * (p - support.state.x_W));
+    }
+  }
+  const ShapeGeometry& mg = mover.geometry;
+  if (mg.pieces().size() == 1 && mg.pieces()[0].kind == ShapeGeometry::PieceKind::kSphere &&
+      mg.pieces()[0].p_M.norm() == 0.0) {
+    link.sphere_radius = mg.pieces()[0].radius;
+  } else {
+    const std::vector<Vec3>& feature = support_is_b ? geometry.feature1 : geometry.feature2;
+    if (feature.empty()) return std::nullopt;
+    for (const Vec3& p : feature) {
+      link.mover_feature_M.push_back(R_M.transpose() * (p - mover.state.x_W));
+    }
+  }
+  return link;
+}
+
+bool place_link(const HeldLink& link, const BodyState& mover, const BodyState& support,
+                HeldContact& out) {
+  const Mat3 R_S = rotation(support);
+  const Mat3 R_M = rotation(mover);
+  const Vec3 n = R_S * link.normal_S;
+  const Vec3 t1 = R_S * link.t1_S;
+  const Vec3 t2 = n.cross(t1);
+  const Vec3 origin = support.x_W + R_S * link.point_S;
+  auto project = [&](const Vec3& p) { return Vec2(t1.dot(p - origin), t2.dot(p - origin)); };
+  out.n_W = n;
+  out.t1_W = t1;
+  out.t2_W = t2;
+  out.sphere_radius = link.sphere_radius;
+  std::vector<Vec2> feature;
+  std::vector<double> heights;
+  if (link.sphere_radius > 0.0) {
+    const Vec3 c = mover.x_W - link.sphere_radius * n;
+    feature.push_back(project(c));
+    heights.push_back(n.dot(c - origin));
+  } else {
+    for (const Vec3& p_M : link.mover_feature_M) {
+      const Vec3 p = mover.x_W + R_M * p_M;
+      feature.push_back(project(p));
+      heights.push_back(n.dot(p - origin));
+    }
+  }
+  double scale = 1e-300;
+  for (const Vec2& p : feature) scale = std::max(scale, p.norm());
+  const double tol = 1e-12 * scale;
+  std::vector<Vec2> patch = tidy(feature, tol);
+  if (!link.support_face_S.empty() && !patch.empty()) {
+    std::vector<Vec2> face;
+    for (const Vec3& p_S : link.support_face_S) face.push_back(project(support.x_W + R_S * p_S));
+    face = tidy(face, tol);
+    if (patch.size() == 1) {
+      // A point: on the face if inside every edge.
+      bool inside = true;
+      for (std::size_t i = 0; i < face.size() && face.size() >= 3; ++i) {
+        const Vec2 e = face[(i + 1) % face.size()] - face[i];
+        inside = inside && cross2(e, patch[0] - face[i]) >= -tol * e.norm();
+      }
+      if (!inside) patch.clear();
+    } else {
+      patch = tidy(intersect(patch, face), tol);
+    }
+  }
+  if (patch.empty()) return false;
+  double height = 0.0;
+  for (double h : heights) height += h;
+  height /= static_cast<double>(heights.size());
+  const Vec2 c2 = centroid(patch);
+  out.c_W = origin + c2.x() * t1 + c2.y() * t2 + height * n;
+  out.polygon.clear();
+  if (patch.size() >= 3) {
+    out.patch = PatchKind::kPolygon;
+    for (const Vec2& p : patch) out.polygon.push_back(p - c2);
+  } else if (patch.size() == 2) {
+    out.patch = PatchKind::kSegment;
+    const Vec2 d = patch[1] - patch[0];
+    const double length = d.norm();
+    out.segment_W = (d.x() * t1 + d.y() * t2) / length;
+    out.segment_lo = -0.5 * length;
+    out.segment_hi = 0.5 * length;
+  } else {
+    out.patch = PatchKind::kPoint;
+  }
+  return true;
+}
+
+namespace {
+
+// The contact problem of an island at given states: its bodies, and a contact per link.
+struct Problem {
+  std::vector<HeldBody> bodies;
+  std::vector<HeldContact> contacts;
+  bool placed = true;     // every link found its patch
+  std::vector<int> lost;  // links whose patch vanished
+};
+
+KnownMotion known_motion(const Body& b, const BodyState& s) {
+  KnownMotion k;
+  k.x_W = s.x_W;
+  if (b.motion != MotionKind::kKinematic) return k;
+  const KinematicMotion& m = b.kinematic;
+  k.v_W = s.v_W;
+  k.w_W = m.angular_velocity_W;
+  const Vec3 axis_point = m.point_W + m.velocity_W * s.t;
+  k.a_W = m.angular_velocity_W.cross(m.angular_velocity_W.cross(s.x_W - axis_point));
+  return k;
+}
+
+// The bodies' states at time t: island bodies from `states`, the others extrapolated.
+Problem build_problem(const Island& island, const World& world,
+                      const std::vector<BodyState>& states, double t) {
+  Problem p;
+  for (std::size_t k = 0; k < island.bodies.size(); ++k) {
+    const Body& b = world.bodies[island.bodies[k].index];
+    const BodyState& s = states[k];
+    HeldBody h;
+    h.mass = b.mass.mass;
+    h.inertia_W = inertia_W(b, s.q_WM);
+    h.inv_inertia_W = inverse_inertia_W(b, s.q_WM);
+    h.x_W = s.x_W;
+    h.v_W = s.v_W;
+    h.w_W = s.w_W;
+    h.force_W = b.mass.mass * world.gravity_W;
+    p.bodies.push_back(h);
+  }
+  auto state_of = [&](BodyId id) -> BodyState {
+    const int k = island.index_of(id);
+    if (k >= 0) return states[static_cast<std::size_t>(k)];
+    const Body& b = world.bodies[id.index];
+    return t > b.state.t ? advance(b, b.state, t, world.gravity_W, world.settings) : b.state;
+  };
+  for (std::size_t i = 0; i < island.links.size(); ++i) {
+    const HeldLink& link = island.links[i];
+    const BodyState sm = state_of(link.mover);
+    const BodyState ss = state_of(link.support);
+    HeldContact c;
+    if (!place_link(link, sm, ss, c)) {
+      p.placed = false;
+      p.lost.push_back(static_cast<int>(i));
+      c.active = false;
+    }
+    c.mover = island.index_of(link.mover);
+    c.support = island.index_of(link.support);
+    if (c.mover < 0) c.mover_known = known_motion(world.bodies[link.mover.index], sm);
+    if (c.support < 0) c.support_known = known_motion(world.bodies[link.support.index], ss);
+    const Material& m = world.material(link.mover, link.support);
+    c.friction = m.friction;
+    c.spinning_resistance = m.spinning_resistance;
+    c.rolling_resistance = link.sphere_radius > 0.0 ? m.rolling_resistance : 0.0;
+    set_torsion_arm(c);
+    c.sticks = link.sticks;
+    c.slip_dir = link.slip_dir;
+    c.spin_sticks = link.spin_sticks;
+    c.spin_sign = link.spin_sign;
+    c.roll_sticks = link.roll_sticks;
+    c.roll_dir = link.roll_dir;
+    p.contacts.push_back(c);
+  }
+  return p;
+}
+
+Vec2 plane_coords(const HeldContact& c, const Vec3& v) {
+  return Vec2(v.dot(c.t1_W), v.dot(c.t2_W));
+}
+
+// The state vector of the integrated motion: per body x, q (w, x, y, z), v, w.
+constexpr int kPerBody = 13;
+
+dopri5::State pack(const std::vector<BodyState>& states) {
+  dopri5::State y(static_cast<Eigen::Index>(kPerBody * states.size()));
+  for (std::size_t k = 0; k < states.size(); ++k) {
+    const BodyState& s = states[k];
+    const Eigen::Index o = static_cast<Eigen::Index>(kPerBody * k);
+    y.segment<3>(o) = s.x_W;
+    y(o + 3) = s.q_WM.w();
+    y.segment<3>(o + 4) = s.q_WM.vec();
+    y.segment<3>(o + 7) = s.v_W;
+    y.segment<3>(o + 10) = s.w_W;
+  }
+  return y;
+}
+
+std::vector<BodyState> unpack(const dopri5::State& y, double t) {
+  std::vector<BodyState> out(static_cast<std::size_t>(y.size() / kPerBody));
+  for (std::size_t k = 0; k < out.size(); ++k) {
+    const Eigen::Index o = static_cast<Eigen::Index>(kPerBody * k);
+    BodyState& s = out[k];
+    s.t = t;
+    s.x_W = y.segment<3>(o);
+    s.q_WM = Quat(y(o + 3), y(o + 4), y(o + 5), y(o + 6)).normalized();
+    s.v_W = y.segment<3>(o + 7);
+    s.w_W = y.segment<3>(o + 10);
+  }
+  return out;
+}
+
+}  // namespace
+
+int Island::index_of(BodyId id) const {
+  for (std::size_t k = 0; k < bodies.size(); ++k) {
+    if (bodies[k] == id) return static_cast<int>(k);
+  }
+  return -1;
+}
+
+}  // namespace palpable
+
+namespace palpable {
+
+namespace {
+
+// The two world points of a reduced contact's segment, or its one point.
+std::vector<Vec3> contact_points_W(const HeldContact& c) {
+  if (c.patch == PatchKind::kSegment) {
+    return {c.c_W + c.segment_lo * c.segment_W, c.c_W + c.segment_hi * c.segment_W};
+  }
+  return {c.c_W};
+}
+
+// The edge of the support's face (world) that all `points` lie on, or -1.
+int support_edge_under(const HeldLink& link, const BodyState& support,
+                       const std::vector<Vec3>& points) {
+  const std::size_t n = link.support_face_S.size();
+  if (n < 3) return -1;
+  const Mat3 R = rotation(support);
+  double size = 0.0;
+  for (const Vec3& p : link.support_face_S) size = std::max(size, p.norm());
+  const double tol = 1e-9 * std::max(size, 1e-300);
+  for (std::size_t e = 0; e < n; ++e) {
+    const Vec3 a = support.x_W + R * link.support_face_S[e];
+    const Vec3 b = support.x_W + R * link.support_face_S[(e + 1) % n];
+    const Vec3 d = (b - a).normalized();
+    const Vec3 normal = R * link.normal_S;
+    bool on = true;
+    for (const Vec3& p : points) {
+      // Distance within the plane from the edge's line (the points sit `gap` above it).
+      Vec3 r = p - a;
+      r -= normal * normal.dot(r);
+      on = on && (r - d * d.dot(r)).norm() <= tol;
+    }
+    if (on) return static_cast<int>(e);
+  }
+  return -1;
+}
+
+// The link seen the other way round: the old mover's face becomes the plane, the support's edge
+// `edge` the feature on it (a block sliding over the edge of a table, which it then tips over).
+// False if the mover offers no face.
+bool swap_roles(HeldLink& link, int edge, const BodyState& mover, const BodyState& support) {
+  if (link.mover_feature_M.size() < 3) return false;
+  HeldLink swapped;
+  swapped.pair = link.pair;
+  swapped.mover = link.support;
+  swapped.support = link.mover;
+  swapped.support_piece = 0;
+  const std::size_t n = link.support_face_S.size();
+  swapped.mover_feature_M = {link.support_face_S[static_cast<std::size_t>(edge)],
+                             link.support_face_S[(static_cast<std::size_t>(edge) + 1) % n]};
+  swapped.support_face_S = link.mover_feature_M;
+  const Vec3 n_W = rotation(support) * link.normal_S;
+  swapped.normal_S = -(rotation(mover).transpose() * n_W);
+  swapped.point_S = link.mover_feature_M[0];
+  swapped.t1_S = swapped.normal_S.unitOrthogonal();
+  swapped.gap = link.gap;
+  link = swapped;
+  return true;
+}
+
+}  // namespace
+
+Island::PlanResult Island::plan(World& world, const std::vector<const ShapeGeometry*>& geometry,
+                                double t) {
+  PlanResult result;
+  const Settings& settings = world.settings;
+  const double still = settings.still_speed_mps;
+  t0 = t;
+  steps_.clear();
+  orientation_cache_.clear();
+  anchor_.clear();
+  for (BodyId id : bodies) {
+    BodyState s = world.bodies[id.index].state;
+    s.t = t;
+    anchor_.push_back(s);
+  }
+  auto remove_links = [&](std::vector<int> drop) {
+    std::sort(drop.begin(), drop.end());
+    for (auto it = drop.rbegin(); it != drop.rend(); ++it) {
+      result.released.push_back(links[static_cast<std::size_t>(*it)].pair);
+      links.erase(links.begin() + *it);
+    }
+  };
+  HeldModes modes;
+  Problem p;
+  for (int attempt = 0;; ++attempt) {
+    p = build_problem(*this, world, anchor_, t);
+    if (!p.lost.empty()) {
+      remove_links(p.lost);
+      continue;
+    }
+    if (links.empty()) return result;
+    result.projection_energy += project_held_velocities(p.bodies, p.contacts, still);
+    for (std::size_t k = 0; k < bodies.size(); ++k) {
+      anchor_[k].v_W = p.bodies[k].v_W;
+      anchor_[k].w_W = p.bodies[k].w_W;
+    }
+    if (event.kind == IslandEvent::Kind::kTip && event.link >= 0 &&
+        event.link < static_cast<int>(links.size())) {
+      // The centre of pressure reached the edge of the support's face: the mover slides off it
+      // and tips over that edge.
+      HeldLink& link = links[static_cast<std::size_t>(event.link)];
+      const int k_m = index_of(link.mover), k_s = index_of(link.support);
+      const BodyState sm =
+          k_m >= 0 ? anchor_[static_cast<std::size_t>(k_m)] : world.bodies[link.mover.index].state;
+      const BodyState ss = k_s >= 0 ? anchor_[static_cast<std::size_t>(k_s)]
+                                    : world.bodies[link.support.index].state;
+      HeldContact c = p.contacts[static_cast<std::size_t>(event.link)];
+      const int edge = support_edge_under(link, ss, contact_points_W(c));
+      event = IslandEvent{};
+      if (edge < 0 || !swap_roles(link, edge, sm, ss)) {
+        remove_links({static_cast<int>(&link - links.data())});
+      }
+      continue;
+    }
+    std::vector<HeldContact> before = p.contacts;
+    modes = choose_held_modes(p.bodies, p.contacts, still, 1e-9);
+    if (modes.solution.status != HeldStatus::kOk) {
+      result.inconsistent = true;
+      std::vector<int> all(links.size());
+      for (std::size_t i = 0; i < links.size(); ++i) all[i] = static_cast<int>(i);
+      remove_links(all);
+      return result;
+    }
+    // Patches that were reduced (the body tips): about its own edge or vertex, the link keeps
+    // that feature; about the edge of the support's face, the roles turn round.
+    bool again = false;
+    std::vector<int> drop;
+    for (std::size_t i = 0; i < links.size(); ++i) {
+      HeldContact& c = p.contacts[i];
+      if (!c.active) continue;
+      if (c.patch == before[i].patch) continue;
+      HeldLink& link = links[i];
+      const int k_m = index_of(link.mover), k_s = index_of(link.support);
+      const BodyState sm =
+          k_m >= 0 ? anchor_[static_cast<std::size_t>(k_m)] : world.bodies[link.mover.index].state;
+      const BodyState ss = k_s >= 0 ? anchor_[static_cast<std::size_t>(k_s)]
+                                    : world.bodies[link.support.index].state;
+      const std::vector<Vec3> points = contact_points_W(c);
+      const int edge = support_edge_under(link, ss, points);
+      if (edge >= 0) {
+        if (!swap_roles(link, edge, sm, ss)) drop.push_back(static_cast<int>(i));
+        again = true;
+      } else if (link.sphere_radius == 0.0) {
+        link.mover_feature_M.clear();
+        const Mat3 R = rotation(sm);
+        for (const Vec3& q : points) link.mover_feature_M.push_back(R.transpose() * (q - sm.x_W));
+      }
+    }
+    if (!drop.empty()) remove_links(drop);
+    if (again && attempt < 4) continue;
+    break;
+  }
+  // Modes back into the links; contacts that let go leave the island.
+  std::vector<int> released;
+  for (std::size_t i = 0; i < links.size(); ++i) {
+    const HeldContact& c = p.contacts[i];
+    HeldLink& link = links[i];
+    if (!c.active) {
+      released.push_back(static_cast<int>(i));
+      continue;
+    }
+    link.sticks = c.sticks;
+    link.slip_dir = c.slip_dir;
+    link.spin_sticks = c.spin_sticks;
+    link.spin_sign = c.spin_sign;
+    link.roll_sticks = c.roll_sticks;
+    link.roll_dir = c.roll_dir;
+  }
+  remove_links(released);
+  event = IslandEvent{};
+  if (links.empty()) {
+    for (std::size_t k = 0; k < bodies.size(); ++k)
+      world.bodies[bodies[k].index].state = anchor_[k];
+    return result;
+  }
+  // Rebuild for the contacts that remain (their modes are now the links').
+  p = build_problem(*this, world, anchor_, t);
+  const HeldSolution sol = solve_held(p.bodies, p.contacts);
+  classify(world, geometry, p.contacts, sol);
+  for (std::size_t k = 0; k < bodies.size(); ++k) world.bodies[bodies[k].index].state = anchor_[k];
+  return result;
+}
+
+}  // namespace palpable
+
+namespace palpable {
+
+namespace {
+
+bool fixed_side(const World& world, int island_index, BodyId id) {
+  return island_index < 0 && world.bodies[id.index].motion == MotionKind::kFixed;
+}
+
+// Does a known side move uniformly (translate at constant velocity, no turning)?
+bool uniform_known(const KnownMotion& k) {
+  return k.w_W.squaredNorm() == 0.0 && k.a_W.squaredNorm() == 0.0 && k.alpha_W.squaredNorm() == 0.0;
+}
+
+}  // namespace
+
+void Island::classify(const World& world, const std::vector<const ShapeGeometry*>& geometry,
+                      const std::vector<HeldContact>& contacts, const HeldSolution& sol) {
+  const Settings& settings = world.settings;
+  const double still = settings.still_speed_mps;
+  const double a_floor = 1e-9 * (world.gravity_W.norm() + 1.0);
+  const std::size_t nb = bodies.size();
+  std::vector<double> reach(nb);
+  std::vector<bool> sphere(nb);
+  for (std::size_t k = 0; k < nb; ++k) {
+    const Body& b = world.bodies[bodies[k].index];
+    reach[k] = geometry[bodies[k].index]->reach();
+    sphere[k] = is_sphere(b) && spherical_inertia(b, settings);
+  }
+  a_.assign(nb, Vec3::Zero());
+  alpha_.assign(nb, Vec3::Zero());
+  bounds_.assign(nb, MotionBound{});
+  turning_.assign(nb, false);
+  t_end = kInfinity;
+  event = IslandEvent{};
+
+  // At rest: still bodies on fixed supports, not accelerated (equilibrium holds).
+  bool rest = true;
+  for (std::size_t i = 0; i < links.size() && rest; ++i) {
+    const HeldContact& c = contacts[i];
+    rest = (c.mover >= 0 || fixed_side(world, c.mover, links[i].mover)) &&
+           (c.support >= 0 || fixed_side(world, c.support, links[i].support));
+  }
+  for (std::size_t k = 0; k < nb && rest; ++k) {
+    const BodyState& s = anchor_[k];
+    rest = s.v_W.norm() <= still && s.w_W.norm() * reach[k] <= still &&
+           sol.a_W[k].norm() <= a_floor && sol.alpha_W[k].norm() * reach[k] <= a_floor;
+  }
+  if (rest) {
+    motion = Motion::kRest;
+    for (BodyState& s : anchor_) {
+      s.v_W.setZero();
+      s.w_W.setZero();
+    }
+    return;
+  }
+
+  // A sphere rolling on a turntable.
+  if (nb == 1 && links.size() == 1 && sphere[0] && links[0].sphere_radius > 0.0 &&
+      links[0].support_face_S.empty()) {
+    const HeldContact& c = contacts[0];
+    const Body& support = world.bodies[links[0].support.index];
+    const Body& ball = world.bodies[bodies[0].index];
+    if (c.mover == 0 && c.support < 0 && support.motion == MotionKind::kKinematic &&
+        support.kinematic.velocity_W.squaredNorm() == 0.0 && c.sticks &&
+        c.rolling_resistance == 0.0 && c.spinning_resistance == 0.0) {
+      const Vec3& W = support.kinematic.angular_velocity_W;
+      const double spin = W.dot(c.n_W);
+      const double R = links[0].sphere_radius;
+      const double k = ball.mass.principal_moments.x() / (ball.mass.mass * R * R);
+      if (W.cross(c.n_W).norm() <= 1e-12 * W.norm() && spin != 0.0) {
+        motion = Motion::kTurntable;
+        turn_axis_ = c.n_W;
+        turn_w_ = W;
+        turn_point_ = support.kinematic.point_W;
+        turn_rate_ = k / (1.0 + k) * spin;
+        radius_ = R;
+        const BodyState& s = anchor_[0];
+        turn_centre_ = s.x_W + turn_axis_.cross(s.v_W) / turn_rate_;
+        bounds_[0].a_slack = std::abs(turn_rate_) * s.v_W.norm();
+        return;
+      }
+    }
+  }
+
+  // Uniformly accelerated: no body turns but spheres, no plane turns, every slip keeps its
+  // direction.
+  bool uniform = true;
+  for (std::size_t k = 0; k < nb && uniform; ++k) {
+    if (sphere[k]) continue;
+    uniform =
+        anchor_[k].w_W.norm() * reach[k] <= still && sol.alpha_W[k].norm() * reach[k] <= a_floor;
+  }
+  for (std::size_t i = 0; i < contacts.size() && uniform; ++i) {
+    const HeldContact& c = contacts[i];
+    if (c.support < 0 && !uniform_known(c.support_known)) uniform = false;
+    if (c.mover < 0 && !uniform_known(c.mover_known)) uniform = false;
+    const HeldContactMotion& m = sol.motion[i];
+    auto parallel = [](const Vec2& rate, const Vec2& dir) {
+      return std::abs(cross2(rate, dir)) <= 1e-12 * rate.norm();
+    };
+    if (!c.sticks && c.friction > 0.0) {
+      uniform = uniform && parallel(plane_coords(c, m.slip_rate_W), c.slip_dir);
+    }
+    if (!c.roll_sticks && c.rolling_resistance > 0.0) {
+      uniform = uniform && parallel(plane_coords(c, m.dalpha_W), c.roll_dir);
+    }
+  }
+  if (uniform) {
+    motion = Motion::kUniform;
+    for (std::size_t k = 0; k < nb; ++k) {
+      a_[k] = sol.a_W[k];
+      if (sphere[k]) {
+        alpha_[k] = sol.alpha_W[k];
+        turning_[k] = anchor_[k].w_W.cross(alpha_[k]).norm() >
+                      1e-15 * anchor_[k].w_W.norm() * alpha_[k].norm();
+      } else {
+        anchor_[k].w_W.setZero();  // below what the model resolves (snapped, see above)
+      }
+    }
+    find_uniform_event(world, contacts, sol);
+    for (std::size_t k = 0; k < nb; ++k) {
+      bounds_[k].a_W = a_[k];
+      const double span = std::isfinite(t_end) ? t_end - t0 : kInfinity;
+      bounds_[k].w_bound = alpha_[k].squaredNorm() == 0.0
+                               ? anchor_[k].w_W.norm()
+                               : anchor_[k].w_W.norm() + alpha_[k].norm() * span;
+    }
+    return;
+  }
+  motion = Motion::kIntegrated;
+  integrate(world, geometry);
+}
+
+void Island::find_uniform_event(const World& world, const std::vector<HeldContact>& contacts,
+                                const HeldSolution& sol) {
+  auto consider = [&](double dt, IslandEvent::Kind kind, std::size_t link) {
+    if (dt < t_end - t0) {
+      t_end = t0 + dt;
+      event = IslandEvent{kind, static_cast<int>(link)};
+    }
+  };
+  for (std::size_t i = 0; i < contacts.size(); ++i) {
+    const HeldContact& c = contacts[i];
+    const HeldContactMotion& m = sol.motion[i];
+    // A slip (spin, rolling) that decreases at a constant rate stops when it reaches zero.
+    if (!c.sticks && c.friction > 0.0) {
+      const double s = plane_coords(c, m.slip_W).dot(c.slip_dir);
+      const double rate = plane_coords(c, m.slip_rate_W).dot(c.slip_dir);
+      if (rate < 0.0) consider(s / -rate, IslandEvent::Kind::kSlipStop, i);
+    }
+    if (!c.spin_sticks && c.torsion_arm > 0.0) {
+      const double s = m.dw_W.dot(c.n_W) * c.spin_sign;
+      const double rate = m.dalpha_W.dot(c.n_W) * c.spin_sign;
+      if (rate < 0.0) consider(s / -rate, IslandEvent::Kind::kSpinStop, i);
+    }
+    if (!c.roll_sticks && c.rolling_resistance > 0.0) {
+      const double s = plane_coords(c, m.dw_W).dot(c.roll_dir);
+      const double rate = plane_coords(c, m.dalpha_W).dot(c.roll_dir);
+      if (rate < 0.0) consider(s / -rate, IslandEvent::Kind::kRollStop, i);
+    }
+    // The centre of pressure (fixed on the mover, which does not turn; a sphere's contact point
+    // follows its centre) reaching an edge of the support's face.
+    const HeldLink& link = links[i];
+    if (link.support_face_S.size() < 3) continue;
+    const int km = index_of(link.mover), ks = index_of(link.support);
+    const Vec3 v_m = km >= 0 ? anchor_[static_cast<std::size_t>(km)].v_W : c.mover_known.v_W;
+    const Vec3 v_s = ks >= 0 ? anchor_[static_cast<std::size_t>(ks)].v_W : c.support_known.v_W;
+    const Vec3 a_m = km >= 0 ? a_[static_cast<std::size_t>(km)] : Vec3::Zero();
+    const Vec3 a_s = ks >= 0 ? a_[static_cast<std::size_t>(ks)] : Vec3::Zero();
+    const BodyState& ss =
+        ks >= 0 ? anchor_[static_cast<std::size_t>(ks)] : world.bodies[link.support.index].state;
+    const Vec2& cop = sol.forces[i].centre_of_pressure;
+    const Vec3 p = c.c_W + cop.x() * c.t1_W + cop.y() * c.t2_W;
+    const Mat3 R = rotation(ss);
+    const std::size_t n = link.support_face_S.size();
+    for (std::size_t e = 0; e < n; ++e) {
+      const Vec3 a = ss.x_W + R * link.support_face_S[e];
+      const Vec3 b = ss.x_W + R * link.support_face_S[(e + 1) % n];
+      // Inward normal of the edge in the plane (the face is counter-clockwise about n).
+      const Vec3 inward = c.n_W.cross(b - a).normalized();
+      const double f0 = inward.dot(p - a);
+      const double f1 = inward.dot(v_m - v_s);
+      const double f2 = inward.dot(a_m - a_s);
+      const double dt = first_negative(f0, f1, f2);
+      if (std::isfinite(dt)) consider(dt, IslandEvent::Kind::kTip, i);
+    }
+  }
+}
+
+}  // namespace palpable
+
+namespace palpable {
+
+namespace {
+
+// One event function of the integrated motion: >= 0 while the mode holds.
+struct EventValue {
+  IslandEvent::Kind kind;
+  int link;
+  double value;
+  double tolerance;  // below -tolerance it has happened
+};
+
+}  // namespace
+
+void Island::integrate(const World& world, const std::vector<const ShapeGeometry*>& geometry) {
+  const Settings& settings = world.settings;
+  const double rtol = settings.integration_tolerance;
+  const double atol = rtol;
+  double weight = 0.0, size = 0.0;
+  for (BodyId id : bodies) {
+    weight += world.bodies[id.index].mass.mass * world.gravity_W.norm();
+    size = std::max(size, geometry[id.index]->reach());
+  }
+  if (!(weight > 0.0)) weight = 1.0;
+  if (!(size > 0.0 && std::isfinite(size))) size = 1.0;
+  bool failed = false;
+  auto solve_at = [&](double t, const dopri5::State& y, Problem& p) {
+    const std::vector<BodyState> states = unpack(y, t);
+    p = build_problem(*this, world, states, t);
+    return solve_held(p.bodies, p.contacts);
+  };
+  auto rhs = [&](double t, const dopri5::State& y) {
+    Problem p;
+    const HeldSolution s = solve_at(t, y, p);
+    if (s.status != HeldStatus::kOk) failed = true;
+    dopri5::State dy(y.size());
+    for (std::size_t k = 0; k < bodies.size(); ++k) {
+      const Eigen::Index o = static_cast<Eigen::Index>(kPerBody * k);
+      const Quat q(y(o + 3), y(o + 4), y(o + 5), y(o + 6));
+      const Vec3 w = y.segment<3>(o + 10);
+      const Quat dq = Quat(0.0, w.x(), w.y(), w.z()) * q;  // (1/2) [0, w] q, halved below
+      dy.segment<3>(o) = y.segment<3>(o + 7);
+      dy(o + 3) = 0.5 * dq.w();
+      dy.segment<3>(o + 4) = 0.5 * dq.vec();
+      dy.segment<3>(o + 7) = s.a_W[k];
+      dy.segment<3>(o + 10) = s.alpha_W[k];
+    }
+    return dy;
+  };
+  // The event functions at a state.
+  auto events = [&](double t, const dopri5::State& y) {
+    std::vector<EventValue> out;
+    Problem p;
+    const HeldSolution s = solve_at(t, y, p);
+    const std::vector<BodyState> states = unpack(y, t);
+    for (std::size_t i = 0; i < links.size(); ++i) {
+      const HeldContact& c = p.contacts[i];
+      const int li = static_cast<int>(i);
+      if (!c.active) {
+        out.push_back({IslandEvent::Kind::kTip, li, -1.0, 0.0});  // the patch vanished
+        continue;
+      }
+      const HeldContactForces& f = s.forces[i];
+      const HeldContactMotion& m = s.motion[i];
+      const double N = f.normal;
+      const double ftol = 1e-9 * weight;
+      out.push_back({IslandEvent::Kind::kLiftOff, li, N, ftol});
+      // The centre of pressure within the patch (lengths).
+      const Vec2& cop = f.centre_of_pressure;
+      if (c.patch == PatchKind::kPolygon) {
+        double margin = kInfinity;
+        for (std::size_t e = 0; e < c.polygon.size(); ++e) {
+          const Vec2& a = c.polygon[e];
+          const Vec2 d = c.polygon[(e + 1) % c.polygon.size()] - a;
+          margin = std::min(margin, cross2(d, cop - a) / d.norm());
+        }
+        out.push_back({IslandEvent::Kind::kTip, li, margin, 1e-12 * size});
+      } else if (c.patch == PatchKind::kSegment) {
+        const double along = c.segment_W.dot(c.t1_W) * cop.x() + c.segment_W.dot(c.t2_W) * cop.y();
+        out.push_back({IslandEvent::Kind::kTip, li,
+                       std::min(along - c.segment_lo, c.segment_hi - along), 1e-12 * size});
+      }
+      if (c.sticks && c.friction > 0.0) {
+        out.push_back(
+            {IslandEvent::Kind::kSlipStart, li, c.friction * N - f.friction.norm(), ftol});
+      } else if (c.friction > 0.0) {
+        out.push_back({IslandEvent::Kind::kSlipStop, li, plane_coords(c, m.slip_W).dot(c.slip_dir),
+                       settings.still_speed_mps});
+      }
+      if (c.torsion_arm > 0.0) {
+        if (c.spin_sticks) {
+          out.push_back({IslandEvent::Kind::kSlipStart, li, c.torsion_arm * N - std::abs(f.torsion),
+                         ftol * size});
+        } else {
+          out.push_back({IslandEvent::Kind::kSpinStop, li, m.dw_W.dot(c.n_W) * c.spin_sign,
+                         settings.still_speed_mps / size});
+        }
+      }
+      if (c.patch == PatchKind::kPoint && c.rolling_resistance > 0.0) {
+        if (c.roll_sticks) {
+          out.push_back({IslandEvent::Kind::kSlipStart, li,
+                         c.rolling_resistance * N - f.rolling.norm(), ftol * size});
+        } else {
+          out.push_back({IslandEvent::Kind::kRollStop, li, plane_coords(c, m.dw_W).dot(c.roll_dir),
+                         settings.still_speed_mps / size});
+        }
+      }
+      // Another vertex of a polyhedral mover reaching the plane (above the support's face).
+      const HeldLink& link = links[i];
+      const int km = index_of(link.mover);
+      if (link.sphere_radius > 0.0 || km < 0) continue;
+      const ShapeGeometry& g = *geometry[link.mover.index];
+      if (g.pieces().size() != 1 || !g.pieces()[0].mesh) continue;
+      const ShapeGeometry::Piece& piece = g.pieces()[0];
+      const BodyState& sm = states[static_cast<std::size_t>(km)];
+      const Mat3 R = rotation(sm) * piece.R_M;
+      const Vec3 origin = sm.x_W + rotation(sm) * piece.p_M;
+      double lowest = kInfinity;
+      for (int v = 0; v < piece.mesh->num_vertices(); ++v) {
+        const Vec3 q = origin + R * piece.mesh->vertex(v);
+        const double h = c.n_W.dot(q - c.c_W);
+        // Not the held feature itself (within the envelope of the plane now).
+        if (h > settings.envelope_m) lowest = std::min(lowest, h);
+      }
+      if (std::isfinite(lowest)) {
+        out.push_back(
+            {IslandEvent::Kind::kLanding, li, lowest - 0.5 * settings.envelope_m, 1e-12 * size});
+      }
+    }
+    return out;
+  };
+
+  double t = t0;
+  dopri5::State y = pack(anchor_);
+  dopri5::State k0 = rhs(t, y);
+  const double cap = t0 + settings.broad_phase_horizon_s;
+  double h = std::min(1e-3, cap - t);
+  std::vector<EventValue> g_prev = events(t, y);
+  dopri5::Step step;
+  std::vector<double> w_max(bodies.size(), 0.0), a_max(bodies.size(), 0.0);
+  std::vector<Vec3> a_start(bodies.size(), Vec3::Zero());
+  t_end = cap;
+  event = IslandEvent{IslandEvent::Kind::kSegmentEnd, -1};
+  int rejected = 0;
+  while (t < cap && !failed) {
+    h = std::min(h, cap - t);
+    dopri5::take_step(rhs, t, y, k0, h, rtol, atol, step);
+    if (failed) break;
+    if (step.error > 1.0) {
+      h = dopri5::next_step_size(h, step.error);
+      if (++rejected > 1000 || h <= 1e-14 * std::max(1.0, t)) {
+        failed = true;
+        break;
+      }
+      continue;
+    }
+    const std::vector<EventValue> g_new = events(t + h, step.y1);
+    // The earliest event function crossing below its tolerance within the step.
+    double theta_event = 2.0;
+    IslandEvent found;
+    for (std::size_t j = 0; j < g_new.size() && j < g_prev.size(); ++j) {
+      if (g_new[j].kind != g_prev[j].kind || g_new[j].link != g_prev[j].link) continue;
+      if (!(g_prev[j].value >= -g_prev[j].tolerance && g_new[j].value < -g_new[j].tolerance)) {
+        continue;
+      }
+      double lo = 0.0, hi = 1.0;
+      for (int it = 0; it < 60 && hi - lo > 1e-15; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        const std::vector<EventValue> gm = events(t + mid * h, step.at(mid));
+        const bool happened = j < gm.size() && gm[j].value < -gm[j].tolerance;
+        (happened ? hi : lo) = mid;
+      }
+      if (hi < theta_event) {
+        theta_event = hi;
+        found = IslandEvent{g_new[j].kind, g_new[j].link};
+      }
+    }
+    for (std::size_t k = 0; k < bodies.size(); ++k) {
+      const Eigen::Index o = static_cast<Eigen::Index>(kPerBody * k);
+      if (steps_.empty()) a_start[k] = step.k[0].segment<3>(o + 7);
+      for (const dopri5::State& kk : step.k) {
+        a_max[k] = std::max(a_max[k], (kk.segment<3>(o + 7) - a_start[k]).norm());
+      }
+      w_max[k] = std::max(
+          {w_max[k], step.y0.segment<3>(o + 10).norm(), step.y1.segment<3>(o + 10).norm()});
+    }
+    steps_.push_back(step);
+    if (theta_event <= 1.0) {
+      t_end = t + theta_event * h;
+      event = found;
+      break;
+    }
+    t += h;
+    y = step.y1;
+    k0 = step.k[6];
+    g_prev = g_new;
+    h = dopri5::next_step_size(h, step.error);
+  }
+  if (failed) {
+    // The contact problem broke down along the way: end the segment where it last held.
+    t_end = steps_.empty() ? t0 : steps_.back().t + steps_.back().h;
+    event = IslandEvent{IslandEvent::Kind::kSegmentEnd, -1};
+  }
+  // The acceleration of each body from its value at the start, with a quarter more than the
+  // largest departure from it seen at any stage (the stages sample the motion densely enough for
+  // the step's error to be within the tolerance; the margin covers between them).
+  for (std::size_t k = 0; k < bodies.size(); ++k) {
+    bounds_[k].a_W = a_start[k];
+    bounds_[k].a_slack = 1.25 * a_max[k] + 1e-9;
+    bounds_[k].w_bound = 1.25 * w_max[k];
+  }
+}
+
+BodyState Island::state_at(std::size_t k, double t) const {
+  BodyState s = anchor_[k];
+  s.t = t;
+  const double tau = t - t0;
+  if (!(tau > 0.0)) return s;
+  switch (motion) {
+    case Motion::kRest: return s;
+    case Motion::kUniform: {
+      s.x_W = anchor_[k].x_W + anchor_[k].v_W * tau + 0.5 * a_[k] * tau * tau;
+      s.v_W = anchor_[k].v_W + a_[k] * tau;
+      s.w_W = anchor_[k].w_W + alpha_[k] * tau;
+      s.q_WM = turning_[k] ? orientation_at(k, t)
+                           : (rotation_quat(anchor_[k].w_W * tau + 0.5 * alpha_[k] * tau * tau) *
+                              anchor_[k].q_WM)
+                                 .normalized();
+      return s;
+    }
+    case Motion::kTurntable: {
+      const Eigen::AngleAxisd turn(turn_rate_ * tau, turn_axis_);
+      s.x_W = turn_centre_ + turn * (anchor_[k].x_W - turn_centre_);
+      s.v_W = turn * anchor_[k].v_W;
+      s.w_W = angular_velocity_at(k, t);
+      s.q_WM = orientation_at(k, t);
+      return s;
+    }
+    case Motion::kIntegrated: {
+      if (steps_.empty()) return s;
+      auto it = std::upper_bound(steps_.begin(), steps_.end(), t,
+                                 [](double time, const dopri5::Step& st) { return time < st.t; });
+      const dopri5::Step& st = it == steps_.begin() ? steps_.front() : *(it - 1);
+      const double theta = std::clamp((t - st.t) / st.h, 0.0, 1.0);
+      return unpack(st.at(theta), t)[k];
+    }
+  }
+  return s;
+}
+
+Vec3 Island::angular_velocity_at(std::size_t k, double t) const {
+  const double tau = t - t0;
+  if (motion == Motion::kTurntable) {
+    // Rolling: v + w x (-R n) = W x (x - p0), so w's in-plane part is n x (v - W x (x - p0)) / R;
+    // about n nothing turns it.
+    const Eigen::AngleAxisd turn(turn_rate_ * tau, turn_axis_);
+    const Vec3 x = turn_centre_ + turn * (anchor_[k].x_W - turn_centre_);
+    const Vec3 v = turn * anchor_[k].v_W;
+    const Vec3 n = turn_axis_;
+    return n * n.dot(anchor_[k].w_W) + n.cross(v - turn_w_.cross(x - turn_point_)) / radius_;
+  }
+  return anchor_[k].w_W + alpha_[k] * tau;
+}
+
+Quat Island::orientation_at(std::size_t k, double t) const {
+  // q' = (1/2) [0, w(t)] q with w(t) known in closed form: classical Runge-Kutta steps small
+  // enough that |w| dt <= 1e-2 (error ~1e-12 per radian turned), continued from the last time
+  // asked for (samples come in order).
+  if (orientation_cache_.size() != bodies.size()) {
+    orientation_cache_.assign(bodies.size(), {kInfinity, Quat::Identity()});
+  }
+  auto& [t_c, q_c] = orientation_cache_[k];
+  if (!(t_c <= t)) {
+    t_c = t0;
+    q_c = anchor_[k].q_WM;
+  }
+  auto f = [&](double time, const Quat& q) {
+    const Vec3 w = angular_velocity_at(k, time);
+    Quat d = Quat(0.0, w.x(), w.y(), w.z()) * q;
+    d.coeffs() *= 0.5;
+    return d;
+  };
+  while (t_c < t) {
+    const double w = std::max(angular_velocity_at(k, t_c).norm(), 1e-300);
+    const double dt = std::min(t - t_c, 1e-2 / w);
+    const Quat k1 = f(t_c, q_c);
+    Quat q2 = q_c;
+    q2.coeffs() += 0.5 * dt * k1.coeffs();
+    const Quat k2 = f(t_c + 0.5 * dt, q2);
+    Quat q3 = q_c;
+    q3.coeffs() += 0.5 * dt * k2.coeffs();
+    const Quat k3 = f(t_c + 0.5 * dt, q3);
+    Quat q4 = q_c;
+    q4.coeffs() += dt * k3.coeffs();
+    const Quat k4 = f(t_c + dt, q4);
+    q_c.coeffs() += dt / 6.0 * (k1.coeffs() + 2.0 * k2.coeffs() + 2.0 * k3.coeffs() + k4.coeffs());
+    q_c.normalize();
+    t_c += dt;
+  }
+  return q_c;
+}
+
+Island::MotionBound Island::bound(std::size_t k) const {
+  return bounds_[k];
+}
+
+}  // namespace palpable

@@ -1,0 +1,173 @@
+#pragma once
+// Contact that persists (DESIGN.md §8.1-8.3): dynamic bodies held in contact, and their motion
+// between events.
+//
+// A held contact (HeldLink) is kept in the two bodies' own frames: the support owns the contact
+// plane (a face, or a halfspace), the mover touches it with a face, an edge, a vertex or a sphere.
+// The bodies it joins form an island with the contacts among them; fixed and kinematic bodies
+// bound it. Between events an island moves as its contact problem (impulse/contact_dynamics.hpp)
+// says, in closed form where one exists:
+//  - at rest: bodies that are still on fixed supports, in equilibrium inside their friction cones,
+//    stay exactly where they are and cost nothing;
+//  - uniformly accelerated: every body either does not turn or is a sphere, every plane is fixed
+//    (or translates uniformly) and every slip keeps its direction - a block sliding on a ramp, a
+//    sphere sliding or rolling on a plane, a box on a sliding block: x = x0 + v0 t + a t^2 / 2,
+//    w = w0 + alpha t, and every event (a slip that stops, a centre of pressure that reaches the
+//    edge of the support's face) is a root of a polynomial;
+//  - rolling on a turntable: a sphere rolling on a plane turning at Omega about its normal
+//    circles at k Omega / (1 + k) (2 Omega / 7 for a solid ball), exactly;
+//  - otherwise integrated (Dormand-Prince 5(4), tolerance Settings::integration_tolerance) with
+//    dense output, events located on the interpolant.
+// An event is a mode change at its exact instant: a slip that stops (then sticks, or slides on in
+// the unstable direction), sticking friction that reaches its cone, a contact that lets go, a
+// centre of pressure that reaches its patch boundary (the body tips, or slides off its support),
+// another vertex of a held body reaching the plane (it lands: a collision).
+#include "core/body.hpp"
+#include "core/dormand_prince.hpp"
+#include "core/settings.hpp"
+#include "distance/closest_features.hpp"
+#include "impulse/contact_dynamics.hpp"
+#include "scheduler/world.hpp"
+
+#include <optional>
+#include <vector>
+
+namespace palpable {
+
+// A held contact, in the bodies' own frames (modelling frames M; S for the support's).
+struct HeldLink {
+  std::uint32_t pair = 0;  // the pair's slot (PairSet)
+  BodyId mover, support;
+  int support_piece = 0;       // which piece of a compound support holds it
+  double sphere_radius = 0.0;  // > 0: the mover is a sphere centred at its origin
+  // The mover's contact feature: a face (counter-clockwise about the mover's outward normal),
+  // an edge (2 points) or a vertex (1); empty for a sphere.
+  std::vector<Vec3> mover_feature_M;
+  // The support's face (counter-clockwise about normal_S); empty for a halfspace (unbounded).
+  std::vector<Vec3> support_face_S;
+  Vec3 normal_S = Vec3::UnitZ();  // the contact plane's outward normal, toward the mover
+  Vec3 point_S = Vec3::Zero();    // a point of the plane
+  Vec3 t1_S = Vec3::UnitX();      // a tangent fixed in the support: slip directions refer to it
+  double gap = 0.0;               // the gap held [m] (the mover's feature above the plane)
+  // Modes, carried from one plan to the next (see HeldContact).
+  bool sticks = true;
+  Vec2 slip_dir = Vec2::UnitX();
+  bool spin_sticks = true;
+  double spin_sign = 1.0;
+  bool roll_sticks = true;
+  Vec2 roll_dir = Vec2::UnitX();
+};
+
+// One side of a link at this instant.
+struct LinkSide {
+  const Body& body;
+  const ShapeGeometry& geometry;
+  const BodyState& state;
+};
+
+// The link of a pair to be held, from the query at its collision: which body owns the plane (a
+// face or a halfspace facing the other body), and the other's contact feature. nullopt where
+// neither side offers a plane (an edge across an edge, a sphere on an edge or a vertex, two
+// spheres): those stay collisions.
+std::optional<HeldLink> make_held_link(std::uint32_t pair, BodyId a, BodyId b,
+                                       const LinkSide& side_a, const LinkSide& side_b,
+                                       const DistanceResult& closest,
+                                       const ContactGeometry& geometry);
+
+// The plane and the patch of a link at the given states, in the world: the reference point c (the
+// patch's centroid, on the mover's feature), the frame, and the patch (the mover's feature
+// intersected with the support's face, projected on the plane). Empty `polygon` and kPoint for a
+// single point. Returns false if the patch vanished (the mover left the support's face).
+bool place_link(const HeldLink& link, const BodyState& mover, const BodyState& support,
+                HeldContact& out);
+
+// The event that ends an island's present motion.
+struct IslandEvent {
+  enum class Kind : std::uint8_t {
+    kNone,
+    kSlipStop,    // a sliding contact's slip reached zero
+    kSpinStop,    // a spinning patch stopped turning about its normal
+    kRollStop,    // a rolling contact with rolling resistance stopped rolling
+    kSlipStart,   // sticking friction (or torsion, rolling resistance) reached its bound
+    kLiftOff,     // a contact's normal force reached zero
+    kTip,         // a centre of pressure reached its patch's boundary
+    kLanding,     // another vertex of a held body reached the support plane
+    kSegmentEnd,  // the integrated motion's segment ended (re-plan, re-bound)
+  };
+  Kind kind = Kind::kNone;
+  int link = -1;
+};
+const char* to_string(IslandEvent::Kind kind);
+
+// Bodies held together and their motion from t0.
+class Island {
+ public:
+  enum class Motion : std::uint8_t { kRest, kUniform, kTurntable, kIntegrated };
+
+  std::vector<BodyId> bodies;
+  std::vector<HeldLink> links;
+
+  // The motion from t0 and when it ends.
+  double t0 = 0.0;
+  Motion motion = Motion::kRest;
+  double t_end = kInfinity;  // the next event's time
+  IslandEvent event;
+  double last_event_t = -kInfinity;  // when its last event was (no progress: counted)
+  int stalls = 0;
+
+  // What plan() found.
+  struct PlanResult {
+    std::vector<std::uint32_t> released;  // pairs of the links that let go (removed from links)
+    double projection_energy = 0.0;       // kinetic energy the velocity projection took out [J]
+    bool inconsistent = false;            // the contact problem had no solution (counted)
+  };
+
+  // Plans the motion from time t: the bodies' states are read from the world (committed at t);
+  // their velocities are projected onto the held constraints and written back; the modes are
+  // chosen; links that let go are removed; the motion and its next event are found.
+  PlanResult plan(World& world, const std::vector<const ShapeGeometry*>& geometry, double t);
+
+  // A body's state at time t >= t0 (index into `bodies`).
+  BodyState state_at(std::size_t k, double t) const;
+  // Index of `id` in `bodies`, or -1.
+  int index_of(BodyId id) const;
+  // The body's acceleration over the present motion, as a bound for time-of-impact bounds:
+  // nominal acceleration and the most the true one can differ from it [m/s^2], and a bound on
+  // |w| [rad/s].
+  struct MotionBound {
+    Vec3 a_W = Vec3::Zero();
+    double a_slack = 0.0;
+    double w_bound = 0.0;
+  };
+  MotionBound bound(std::size_t k) const;
+  // The body's acceleration now (the nominal of bound()).
+  const Vec3& acceleration(std::size_t k) const { return bounds_[k].a_W; }
+
+ private:
+  void classify(const World& world, const std::vector<const ShapeGeometry*>& geometry,
+                const std::vector<HeldContact>& contacts, const HeldSolution& solution);
+  void find_uniform_event(const World& world, const std::vector<HeldContact>& contacts,
+                          const HeldSolution& solution);
+  void integrate(const World& world, const std::vector<const ShapeGeometry*>& geometry);
+  Quat orientation_at(std::size_t k, double t) const;
+  Vec3 angular_velocity_at(std::size_t k, double t) const;
+
+  std::vector<BodyState> anchor_;  // states at t0
+  std::vector<Vec3> a_, alpha_;    // kUniform
+  // kTurntable: the sphere's centre circles c + R(rate t) (x0 - c) in the plane.
+  Vec3 turn_axis_ = Vec3::UnitZ();
+  Vec3 turn_centre_ = Vec3::Zero();
+  double turn_rate_ = 0.0;
+  Vec3 turn_w_ = Vec3::Zero();  // the platter's angular velocity
+  Vec3 turn_point_ = Vec3::Zero();
+  double radius_ = 0.0;
+  // kIntegrated: the accepted steps of the segment.
+  std::vector<dopri5::Step> steps_;
+  std::vector<MotionBound> bounds_;
+  std::vector<bool> turning_;  // kUniform: w0 and alpha not parallel (orientation integrated)
+  // Orientation of a sphere whose angular velocity turns (kUniform with w0 not parallel to alpha,
+  // kTurntable): integrated on demand and cached at the last time asked for.
+  mutable std::vector<std::pair<double, Quat>> orientation_cache_;
+};
+
+}  // namespace palpable

@@ -1,0 +1,305 @@
+// The contact problem at the acceleration level (impulse/contact_dynamics.hpp) against closed
+// forms: a block sliding and sticking on a ramp (with its centre of pressure), a tall block that
+// tips, a sphere rolling down a slope and sliding on a plane, a ball rolling on a turning platter,
+// two stacked boxes sliding together, torsion and rolling resistance, lift-off, and the modes
+// chosen for each.
+#include "impulse/contact_dynamics.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+using namespace palpable;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kG = 9.81;
+
+HeldBody box(double mass, const Vec3& half, const Vec3& x, const Vec3& v = Vec3::Zero(),
+             const Vec3& w = Vec3::Zero()) {
+  HeldBody b;
+  b.mass = mass;
+  const Vec3 h2 = (2.0 * half).cwiseAbs2();
+  b.inertia_W =
+      (mass / 12.0 * Vec3(h2.y() + h2.z(), h2.x() + h2.z(), h2.x() + h2.y())).asDiagonal();
+  b.inv_inertia_W = b.inertia_W.inverse();
+  b.x_W = x;
+  b.v_W = v;
+  b.w_W = w;
+  b.force_W = Vec3(0, 0, -kG * mass);
+  return b;
+}
+
+HeldBody ball(double mass, double radius, const Vec3& x, const Vec3& v = Vec3::Zero(),
+              const Vec3& w = Vec3::Zero()) {
+  HeldBody b;
+  b.mass = mass;
+  b.inertia_W = Mat3::Identity() * 0.4 * mass * radius * radius;
+  b.inv_inertia_W = b.inertia_W.inverse();
+  b.x_W = x;
+  b.v_W = v;
+  b.w_W = w;
+  b.force_W = Vec3(0, 0, -kG * mass);
+  return b;
+}
+
+// A contact of body `mover` on a fixed plane through c with normal n; t1 is `t1`.
+HeldContact on_plane(int mover, const Vec3& c, const Vec3& n, const Vec3& t1, double mu) {
+  HeldContact k;
+  k.mover = mover;
+  k.c_W = c;
+  k.n_W = n;
+  k.t1_W = t1;
+  k.t2_W = n.cross(t1);
+  k.friction = mu;
+  return k;
+}
+
+// A square face of half-size h on the contact plane, about c.
+void square_patch(HeldContact& k, double h) {
+  k.patch = PatchKind::kPolygon;
+  k.polygon = {Vec2(-h, -h), Vec2(h, -h), Vec2(h, h), Vec2(-h, h)};
+  set_torsion_arm(k);
+}
+
+// A 0.2 m cube of 1 kg resting on a ramp at angle theta (normal n in the x-z plane), moving at
+// speed v down the slope; its centre is 0.1 m above the contact's reference point.
+struct Ramp {
+  Vec3 n, down, across;
+  std::vector<HeldBody> bodies;
+  std::vector<HeldContact> contacts;
+  Ramp(double theta, double mu, double v, double half_height = 0.1) {
+    n = Vec3(std::sin(theta), 0, std::cos(theta));
+    down = Vec3(std::cos(theta), 0, -std::sin(theta));
+    across = n.cross(down);
+    HeldBody b = box(1.0, Vec3(0.1, 0.1, half_height), half_height * n, v * down);
+    // The box's axes along the ramp: its inertia about them (a cube is isotropic, a tall block
+    // is not): rotate the diagonal inertia into the ramp frame.
+    Mat3 R;
+    R.col(0) = down;
+    R.col(1) = across;
+    R.col(2) = n;
+    b.inertia_W = R * b.inertia_W * R.transpose();
+    b.inv_inertia_W = b.inertia_W.inverse();
+    bodies = {b};
+    HeldContact k = on_plane(0, Vec3::Zero(), n, down, mu);
+    square_patch(k, 0.1);
+    contacts = {k};
+  }
+};
+
+}  // namespace
+
+TEST_CASE("held: a block sliding down a ramp accelerates at g (sin - mu cos)", "[impulse][held]") {
+  const double theta = kPi / 6, mu = 0.3;
+  Ramp r(theta, mu, 1.0);
+  r.contacts[0].sticks = false;
+  r.contacts[0].slip_dir = Vec2(1, 0);  // down the slope
+  const HeldSolution s = solve_held(r.bodies, r.contacts);
+  REQUIRE(s.status == HeldStatus::kOk);
+  const double a = kG * (std::sin(theta) - mu * std::cos(theta));
+  CHECK((s.a_W[0] - a * r.down).norm() < 1e-13);
+  CHECK(s.alpha_W[0].norm() < 1e-13);
+  CHECK(s.forces[0].normal == Approx(kG * std::cos(theta)).epsilon(1e-14));
+  // Friction acts uphill at the base, 0.1 m below the centre: the pressure moves mu h downhill.
+  CHECK(s.forces[0].centre_of_pressure.x() == Approx(mu * 0.1).epsilon(1e-13));
+  CHECK(s.forces[0].centre_of_pressure.y() == Approx(0.0).margin(1e-15));
+  CHECK(worst_violation(r.contacts, s, 1e-12).kind == HeldViolation::Kind::kNone);
+}
+
+TEST_CASE("held: a block that can stick on a ramp sticks, one that cannot slides downhill",
+          "[impulse][held]") {
+  const double theta = 20.0 * kPi / 180.0;
+  {
+    Ramp r(theta, 0.5, 0.0);
+    const HeldModes m = choose_held_modes(r.bodies, r.contacts, 1e-12, 1e-12);
+    REQUIRE(m.solution.status == HeldStatus::kOk);
+    CHECK(m.changes == 0);
+    CHECK(r.contacts[0].sticks);
+    CHECK(m.solution.a_W[0].norm() < 1e-13);
+    CHECK(m.solution.alpha_W[0].norm() < 1e-13);
+    // Friction holds m g sin theta uphill; the pressure sits tan theta h downhill.
+    CHECK(m.solution.forces[0].friction.x() == Approx(-kG * std::sin(theta)).epsilon(1e-13));
+    CHECK(m.solution.forces[0].centre_of_pressure.x() ==
+          Approx(std::tan(theta) * 0.1).epsilon(1e-12));
+  }
+  {
+    Ramp r(theta, 0.3, 0.0);  // tan 20 deg = 0.364 > 0.3
+    const HeldModes m = choose_held_modes(r.bodies, r.contacts, 1e-12, 1e-12);
+    REQUIRE(m.solution.status == HeldStatus::kOk);
+    CHECK(m.changes == 1);
+    CHECK_FALSE(r.contacts[0].sticks);
+    CHECK(r.contacts[0].slip_dir.x() == Approx(1.0).epsilon(1e-12));
+    CHECK(std::abs(r.contacts[0].slip_dir.y()) < 1e-12);
+    const double a = kG * (std::sin(theta) - 0.3 * std::cos(theta));
+    CHECK((m.solution.a_W[0] - a * r.down).norm() < 1e-12);
+  }
+}
+
+TEST_CASE("held: a tall block sticking on a steep ramp tips about its lower edge",
+          "[impulse][held]") {
+  // A 0.2 x 0.2 x 1 m column on a 30 degree ramp with mu = 1: sticking needs the pressure
+  // tan 30 x 0.5 = 0.29 m downhill, outside the 0.1 m half-width: it tips about the downhill
+  // edge, which becomes a segment contact.
+  Ramp r(kPi / 6, 1.0, 0.0, 0.5);
+  const HeldModes m = choose_held_modes(r.bodies, r.contacts, 1e-12, 1e-12);
+  REQUIRE(m.solution.status == HeldStatus::kOk);
+  CHECK(m.changes >= 1);
+  REQUIRE(r.contacts[0].patch == PatchKind::kSegment);
+  CHECK(r.contacts[0].c_W.dot(r.down) == Approx(0.1).epsilon(1e-12));
+  CHECK(std::abs(r.contacts[0].segment_W.dot(r.across)) == Approx(1.0));
+  // Turning forward: about -across x ... the angular acceleration points along +across x down...
+  CHECK(std::abs(m.solution.alpha_W[0].dot(r.across)) > 1.0);
+  CHECK(m.solution.forces[0].normal > 0.0);
+}
+
+TEST_CASE(
+    "held: a sphere rolls down a slope at 5/7 g sin theta, sliding, its slip decays at "
+    "7/2 mu g",
+    "[impulse][held]") {
+  const double theta = 0.2, R = 0.05;
+  const Vec3 n(std::sin(theta), 0, std::cos(theta));
+  const Vec3 down(std::cos(theta), 0, -std::sin(theta));
+  std::vector<HeldBody> bodies = {ball(0.1, R, R * n)};
+  HeldContact k = on_plane(0, Vec3::Zero(), n, down, 0.5);
+  k.sphere_radius = R;
+  std::vector<HeldContact> contacts = {k};
+  {
+    const HeldModes m = choose_held_modes(bodies, contacts, 1e-12, 1e-12);
+    REQUIRE(m.solution.status == HeldStatus::kOk);
+    CHECK(contacts[0].sticks);
+    CHECK((m.solution.a_W[0] - 5.0 / 7.0 * kG * std::sin(theta) * down).norm() < 1e-13);
+    // Rolling: alpha = n x a / R.
+    CHECK((m.solution.alpha_W[0] - n.cross(m.solution.a_W[0]) / R).norm() < 1e-11);
+  }
+  // On a level table, sliding at 2 m/s without spin: ds/dt = -mu g (1 + 1/k), k = 2/5.
+  bodies = {ball(0.1, R, Vec3(0, 0, R), Vec3(2, 0, 0))};
+  contacts = {on_plane(0, Vec3::Zero(), Vec3::UnitZ(), Vec3::UnitX(), 0.2)};
+  contacts[0].sphere_radius = R;
+  const HeldModes m = choose_held_modes(bodies, contacts, 1e-12, 1e-12);
+  REQUIRE(m.solution.status == HeldStatus::kOk);
+  CHECK_FALSE(contacts[0].sticks);
+  CHECK((m.solution.motion[0].slip_rate_W - Vec3(-3.5 * 0.2 * kG, 0, 0)).norm() < 1e-12);
+  CHECK((m.solution.a_W[0] - Vec3(-0.2 * kG, 0, 0)).norm() < 1e-13);
+}
+
+TEST_CASE("held: a ball rolling on a platter turning at Omega circles at 2 Omega / 7",
+          "[impulse][held]") {
+  // Rolling on a plane spinning at Omega about its normal through the origin: dv/dt = (2/7)
+  // Omega x v for the centre (DESIGN.md §6).
+  const double Omega = 2 * kPi, R = 0.05;
+  const Vec3 x(0.3, 0.1, R), v(0.05, 0.1, 0);
+  const Vec3 W(0, 0, Omega);
+  // Rolling: v + w x (-R n) = W x (x - R n) (the platter's velocity at the contact point).
+  const Vec3 n = Vec3::UnitZ();
+  const Vec3 u_platter = W.cross(x - R * n);
+  // w x (-R n) = u_platter - v: choose w in-plane with R (n x w) = u_platter - v.
+  const Vec3 d = u_platter - v;
+  const Vec3 w = -n.cross(d) / R;
+  std::vector<HeldBody> bodies = {ball(0.1, R, x, v, w)};
+  HeldContact k = on_plane(0, Vec3(x.x(), x.y(), 0), n, Vec3::UnitX(), 0.5);
+  k.sphere_radius = R;
+  k.support_known.w_W = W;
+  k.support_known.v_W = Vec3::Zero();
+  k.support_known.x_W = Vec3::Zero();
+  std::vector<HeldContact> contacts = {k};
+  REQUIRE(held_velocities(bodies, contacts)[0].slip_W.norm() < 1e-15);
+  const HeldModes m = choose_held_modes(bodies, contacts, 1e-12, 1e-12);
+  REQUIRE(m.solution.status == HeldStatus::kOk);
+  CHECK(contacts[0].sticks);
+  CHECK((m.solution.a_W[0] - 2.0 / 7.0 * W.cross(v)).norm() < 1e-13);
+  CHECK(m.solution.motion[0].slip_rate_W.norm() < 1e-12);
+}
+
+TEST_CASE("held: a box on a sliding block stops with it (two dynamic bodies)", "[impulse][held]") {
+  // A 0.5 kg box on a 1 kg block sliding at 1 m/s on a floor with mu 0.3; mu 1 between them.
+  // Together they decelerate at 0.3 g; the box needs 0.3 g x 0.5 kg of friction < 1 x its weight.
+  std::vector<HeldBody> bodies = {box(1.0, Vec3(0.2, 0.2, 0.1), Vec3(0, 0, 0.1), Vec3(1, 0, 0)),
+                                  box(0.5, Vec3(0.1, 0.1, 0.1), Vec3(0, 0, 0.3), Vec3(1, 0, 0))};
+  HeldContact floor = on_plane(0, Vec3::Zero(), Vec3::UnitZ(), Vec3::UnitX(), 0.3);
+  square_patch(floor, 0.2);
+  HeldContact between = on_plane(1, Vec3(0, 0, 0.2), Vec3::UnitZ(), Vec3::UnitX(), 1.0);
+  between.support = 0;
+  square_patch(between, 0.1);
+  std::vector<HeldContact> contacts = {floor, between};
+  const HeldModes m = choose_held_modes(bodies, contacts, 1e-12, 1e-12);
+  REQUIRE(m.solution.status == HeldStatus::kOk);
+  CHECK_FALSE(contacts[0].sticks);
+  CHECK(contacts[1].sticks);
+  for (int b = 0; b < 2; ++b) {
+    CHECK((m.solution.a_W[b] - Vec3(-0.3 * kG, 0, 0)).norm() < 1e-12);
+    CHECK(m.solution.alpha_W[b].norm() < 1e-12);
+  }
+  CHECK(m.solution.forces[0].normal == Approx(1.5 * kG).epsilon(1e-13));
+  CHECK(m.solution.forces[1].normal == Approx(0.5 * kG).epsilon(1e-13));
+  CHECK(m.solution.forces[1].friction.x() == Approx(-0.5 * 0.3 * kG).epsilon(1e-12));
+}
+
+TEST_CASE(
+    "held: torsion slows a spinning face at mu g r_eff / (I / m), rolling resistance a ball "
+    "at 5 d g / 7 r",
+    "[impulse][held]") {
+  {
+    // A cube spinning flat at 3 rad/s on the ground (not sliding).
+    std::vector<HeldBody> bodies = {
+        box(1.0, Vec3(0.1, 0.1, 0.1), Vec3(0, 0, 0.1), Vec3::Zero(), Vec3(0, 0, 3))};
+    HeldContact k = on_plane(0, Vec3::Zero(), Vec3::UnitZ(), Vec3::UnitX(), 0.4);
+    square_patch(k, 0.1);
+    std::vector<HeldContact> contacts = {k};
+    const HeldModes m = choose_held_modes(bodies, contacts, 1e-12, 1e-12);
+    REQUIRE(m.solution.status == HeldStatus::kOk);
+    CHECK_FALSE(contacts[0].spin_sticks);
+    const double I = bodies[0].inertia_W(2, 2);
+    CHECK(m.solution.alpha_W[0].z() == Approx(-contacts[0].torsion_arm * kG / I).epsilon(1e-13));
+    // r_eff of a square of side a about its centre: a (sqrt 2 + ln(1 + sqrt 2)) / 6.
+    const double a = 0.2;
+    CHECK(contacts[0].torsion_arm ==
+          Approx(0.4 * a * (std::sqrt(2.0) + std::log(1 + std::sqrt(2.0))) / 6.0).epsilon(1e-12));
+  }
+  {
+    const double R = 0.05, d = 1e-3;
+    std::vector<HeldBody> bodies = {
+        ball(0.1, R, Vec3(0, 0, R), Vec3(1, 0, 0), Vec3(0, 1.0 / R, 0))};
+    HeldContact k = on_plane(0, Vec3::Zero(), Vec3::UnitZ(), Vec3::UnitX(), 0.5);
+    k.sphere_radius = R;
+    k.rolling_resistance = d;
+    std::vector<HeldContact> contacts = {k};
+    const HeldModes m = choose_held_modes(bodies, contacts, 1e-12, 1e-12);
+    REQUIRE(m.solution.status == HeldStatus::kOk);
+    CHECK(contacts[0].sticks);
+    CHECK_FALSE(contacts[0].roll_sticks);
+    CHECK(m.solution.a_W[0].x() == Approx(-5.0 * d * kG / (7.0 * R)).epsilon(1e-12));
+  }
+}
+
+TEST_CASE("held: a contact that would have to pull lets go", "[impulse][held]") {
+  // A box "resting" under a ceiling: gravity pulls it away.
+  std::vector<HeldBody> bodies = {box(1.0, Vec3(0.1, 0.1, 0.1), Vec3(0, 0, -0.1))};
+  HeldContact k = on_plane(0, Vec3::Zero(), -Vec3::UnitZ(), Vec3::UnitX(), 0.5);
+  square_patch(k, 0.1);
+  std::vector<HeldContact> contacts = {k};
+  const HeldModes m = choose_held_modes(bodies, contacts, 1e-12, 1e-12);
+  REQUIRE(m.solution.status == HeldStatus::kOk);
+  CHECK_FALSE(contacts[0].active);
+  REQUIRE(m.released.size() == 1);
+  CHECK((m.solution.a_W[0] - Vec3(0, 0, -kG)).norm() < 1e-15);
+}
+
+TEST_CASE("held: the velocity projection zeroes the approach and the rocking, nothing else",
+          "[impulse][held]") {
+  // A cube arriving at 1 cm/s onto the ground while sliding at 1 m/s and rocking slightly.
+  std::vector<HeldBody> bodies = {
+      box(1.0, Vec3(0.1, 0.1, 0.1), Vec3(0, 0, 0.1), Vec3(1, 0, -0.01), Vec3(0.02, 0, 0.5))};
+  HeldContact k = on_plane(0, Vec3::Zero(), Vec3::UnitZ(), Vec3::UnitX(), 0.5);
+  square_patch(k, 0.1);
+  std::vector<HeldContact> contacts = {k};
+  const double dE = project_held_velocities(bodies, contacts, 1e-12);
+  CHECK(dE <= 0.0);
+  const HeldContactMotion after = held_velocities(bodies, contacts)[0];
+  CHECK(std::abs(after.slip_W.z()) < 1e-15);
+  CHECK(std::abs(after.dw_W.x()) < 1e-15);
+  CHECK(std::abs(after.dw_W.y()) < 1e-15);
+  CHECK(bodies[0].w_W.z() == Approx(0.5));  // the spin about n is not still: kept
+  CHECK(bodies[0].v_W.x() == Approx(1.0));  // nor is the slide
+}
