@@ -18,7 +18,9 @@ double rotational_term(const ToiMotion& motion, const Vec3& d_hat) {
 }
 
 double solve_gap_closing(double a, double b, double delta) {
-  if (!(delta > 0.0)) return 0.0;
+  // Inside the target gap already: it closes now if it is closing at all; a gap neither closing
+  // nor accelerated closed (two bodies at rest together) stays as it is.
+  if (!(delta > 0.0)) return b > 0.0 || a > 0.0 || std::isnan(a + b) ? 0.0 : kInfinity;
   const double disc = b * b + 2.0 * a * delta;
   if (disc < 0.0) return kInfinity;
   if (b > 0.0) return 2.0 * delta / (b + std::sqrt(disc));

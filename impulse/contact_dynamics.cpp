@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
 namespace palpable {
 
@@ -87,7 +88,7 @@ Kinematics kinematics(const HeldContact& c, const std::vector<HeldBody>& bodies)
   const Vec3 u_m = k.m.v + k.m.w.cross(k.r_m);
   const Vec3 u_s = k.s.v + k.s.w.cross(k.r_s);
   k.slip = u_m - u_s;
-  k.n_dot = k.s.w.cross(c.n_W);
+  k.n_dot = c.has_n_dot ? c.n_dot_W : Vec3(k.s.w.cross(c.n_W));
   k.dw = k.m.w - k.s.w;
   const Mat3 I = Mat3::Identity();
   // The mover's contact point: a material point of a polyhedron, whose acceleration is
@@ -154,7 +155,7 @@ class Assembly {
   // The velocity-level problem: rows for each active contact's normal and rocking, and for its
   // friction, torsion and rolling where they are still; impulses of least norm that zero them.
   static double project(std::vector<HeldBody>& bodies, const std::vector<HeldContact>& contacts,
-                        double still) {
+                        double still, double separation, std::vector<int>* separating) {
     std::vector<HeldContact> held = contacts;
     const std::vector<HeldContactMotion> now = held_velocities(bodies, contacts);
     for (std::size_t i = 0; i < held.size(); ++i) {
@@ -162,32 +163,48 @@ class Assembly {
       const HeldContactMotion& m = now[i];
       // Only what is still is held at the velocity level; what slides keeps its motion (no
       // sliding couplings here: the impulses are small by construction).
-      c.sticks = plane_coords(c, m.slip_W).norm() <= still;
-      c.spin_sticks = std::abs(m.dw_W.dot(c.n_W)) * turning_size(c) <= still;
-      c.roll_sticks = plane_coords(c, m.dw_W).norm() * c.sphere_radius <= still;
+      c.sticks = c.slip_stopped || plane_coords(c, m.slip_W).norm() <= still;
+      c.spin_sticks = c.spin_stopped || std::abs(m.dw_W.dot(c.n_W)) * turning_size(c) <= still;
+      c.roll_sticks = c.roll_stopped || plane_coords(c, m.dw_W).norm() * c.sphere_radius <= still;
       if (!c.sticks) c.friction = 0.0;
       if (!c.spin_sticks) c.torsion_arm = 0.0;
       if (!c.roll_sticks) c.rolling_resistance = 0.0;
     }
-    Assembly a(bodies, held, /*velocity_level=*/true);
-    const Eigen::Index m = static_cast<Eigen::Index>(a.rows_.size());
-    if (m == 0) return 0.0;
-    MatX A(m, m);
-    VecX rhs(m);
-    for (Eigen::Index i = 0; i < m; ++i) {
-      rhs(i) = -a.rows_[static_cast<std::size_t>(i)].bias;
-      for (Eigen::Index j = 0; j < m; ++j) A(i, j) = a.coupling(i, j);
+    // A contact already separating faster than `separation` (an impact sent its bodies apart)
+    // is left out and reported: it lets go.
+    for (std::size_t i = 0; i < held.size(); ++i) {
+      if (held[i].active && now[i].slip_W.dot(held[i].n_W) > separation) {
+        held[i].active = false;
+        if (separating) separating->push_back(static_cast<int>(i));
+      }
     }
-    const VecX p = Eigen::CompleteOrthogonalDecomposition<MatX>(A).solve(rhs);
-    if (!p.allFinite()) return 0.0;
+    auto a = std::make_unique<Assembly>(bodies, held, /*velocity_level=*/true);
+    {
+      const Eigen::Index m = static_cast<Eigen::Index>(a->rows_.size());
+      if (m == 0) return 0.0;
+    }
+    VecX p;
+    {
+      const Eigen::Index m = static_cast<Eigen::Index>(a->rows_.size());
+      MatX A(m, m);
+      VecX rhs(m);
+      for (Eigen::Index i = 0; i < m; ++i) {
+        rhs(i) = -a->rows_[static_cast<std::size_t>(i)].bias;
+        for (Eigen::Index j = 0; j < m; ++j) A(i, j) = a->coupling(i, j);
+      }
+      p = Eigen::CompleteOrthogonalDecomposition<MatX>(A).solve(rhs);
+      if (!p.allFinite()) return 0.0;
+    }
+    const Assembly& asm_ = *a;
+    const Eigen::Index m = static_cast<Eigen::Index>(asm_.rows_.size());
     double before = 0.0, after = 0.0;
     for (const HeldBody& b : bodies) before += kinetic(b);
     for (Eigen::Index j = 0; j < m; ++j) {
-      const Row& r = a.rows_[static_cast<std::size_t>(j)];
+      const Row& r = asm_.rows_[static_cast<std::size_t>(j)];
       for (int q = 0; q < 2; ++q) {
         if (r.body[q] < 0) continue;
         HeldBody& b = bodies[static_cast<std::size_t>(r.body[q])];
-        const Vec6 dv = p(j) * a.apply_inverse_mass(r.body[q], r.W[q]);
+        const Vec6 dv = p(j) * asm_.apply_inverse_mass(r.body[q], r.W[q]);
         b.v_W += dv.head<3>();
         b.w_W += dv.tail<3>();
       }
@@ -506,8 +523,9 @@ void reduce_patch(HeldContact& c, int edge) {
 }
 
 double project_held_velocities(std::vector<HeldBody>& bodies,
-                               const std::vector<HeldContact>& contacts, double still) {
-  return Assembly::project(bodies, contacts, still);
+                               const std::vector<HeldContact>& contacts, double still,
+                               double separation, std::vector<int>* separating) {
+  return Assembly::project(bodies, contacts, still, separation, separating);
 }
 
 HeldViolation worst_violation(const std::vector<HeldContact>& contacts, const HeldSolution& s,
@@ -582,13 +600,13 @@ HeldModes choose_held_modes(const std::vector<HeldBody>& bodies, std::vector<Hel
     HeldContact& c = contacts[i];
     const HeldContactMotion& m = now[i];
     const Vec2 slip = plane_coords(c, m.slip_W);
-    c.sticks = slip.norm() <= still;
+    c.sticks = c.slip_stopped || slip.norm() <= still;
     if (!c.sticks) c.slip_dir = slip.normalized();
     const double spin = m.dw_W.dot(c.n_W);
-    c.spin_sticks = std::abs(spin) * turning_size(c) <= still;
+    c.spin_sticks = c.spin_stopped || std::abs(spin) * turning_size(c) <= still;
     if (!c.spin_sticks) c.spin_sign = spin > 0.0 ? 1.0 : -1.0;
     const Vec2 rolling = plane_coords(c, m.dw_W);
-    c.roll_sticks = rolling.norm() * std::max(c.sphere_radius, 1e-300) <= still;
+    c.roll_sticks = c.roll_stopped || rolling.norm() * std::max(c.sphere_radius, 1e-300) <= still;
     if (!c.roll_sticks) c.roll_dir = rolling.normalized();
   }
   const int budget = 8 + 4 * static_cast<int>(contacts.size());

@@ -78,6 +78,10 @@ struct HeldContact {
   Vec3 n_W = Vec3::UnitZ();
   Vec3 t1_W = Vec3::UnitX(), t2_W = Vec3::UnitY();
   double sphere_radius = 0.0;  // > 0: the mover is a sphere of this radius touching at c
+  // The normal's rate when it does not simply turn with the support (two spheres, a sphere on an
+  // edge, an edge across an edge: the normal follows the closest points of two features).
+  bool has_n_dot = false;
+  Vec3 n_dot_W = Vec3::Zero();
   PatchKind patch = PatchKind::kPoint;
   // kSegment: the segment runs from c + lo s to c + hi s (lo <= 0 <= hi) [m].
   Vec3 segment_W = Vec3::UnitX();
@@ -92,6 +96,9 @@ struct HeldContact {
   // The torsion bound over N [m]: mu r_eff over a patch, s at a point (set_torsion_arm).
   double torsion_arm = 0.0;
   bool active = true;  // false: let go (ignored by the solver)
+  // Its slip (spin, rolling) has just stopped at an event, to the integration's accuracy: it
+  // counts as still whatever remains (choose_held_modes, project_held_velocities).
+  bool slip_stopped = false, spin_stopped = false, roll_stopped = false;
 
   // Modes. Sliding directions are unit vectors in (t1, t2).
   bool sticks = true;  // friction force: sticking (else sliding along slip_dir)
@@ -148,10 +155,13 @@ std::vector<HeldContactMotion> held_velocities(const std::vector<HeldBody>& bodi
 // of it is still (friction, torsion, rolling relative motion below `still`), that zero those
 // relative velocities. A contact handed over from a collision arrives with |u_n| below the
 // microcollision speed; the projection takes out that remainder and the rocking (the plastic
-// slap of the centre-of-pressure rule). Changes the bodies' v_W and w_W; returns the kinetic
-// energy change [J] (<= 0).
+// slap of the centre-of-pressure rule). A contact separating faster than `separation` (an impact
+// on its body sent it apart) is left out: its index goes into `separating`. Changes the bodies'
+// v_W and w_W; returns the kinetic energy change [J] (<= 0).
 double project_held_velocities(std::vector<HeldBody>& bodies,
-                               const std::vector<HeldContact>& contacts, double still);
+                               const std::vector<HeldContact>& contacts, double still,
+                               double separation = kInfinity,
+                               std::vector<int>* separating = nullptr);
 
 // What a solution breaks, if anything: the worst violation, to be mended by changing a mode.
 struct HeldViolation {

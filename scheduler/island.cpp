@@ -3,9 +3,12 @@
 #include "core/ballistic.hpp"
 #include "core/check.hpp"
 #include "core/convex_polygon.hpp"
+#include "impulse/microcollision.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 
 namespace palpable {
 
@@ -85,13 +88,92 @@ const char* to_string(IslandEvent::Kind kind) {
   return "unknown";
 }
 
+namespace {
+
+// The radius of a shape that is one sphere about its origin, else 0.
+double centred_sphere_radius(const ShapeGeometry& g) {
+  if (g.pieces().size() != 1) return 0.0;
+  const ShapeGeometry::Piece& p = g.pieces()[0];
+  return p.kind == ShapeGeometry::PieceKind::kSphere && p.p_M.norm() == 0.0 ? p.radius : 0.0;
+}
+
+std::optional<HeldLink> point_pair_link(std::uint32_t pair, BodyId a, BodyId b,
+                                        const LinkSide& side_a, const LinkSide& side_b,
+                                        const DistanceResult& closest,
+                                        const ContactGeometry& geometry) {
+  const bool mover_is_a = side_a.body.is_dynamic();
+  const LinkSide& mover = mover_is_a ? side_a : side_b;
+  const LinkSide& support = mover_is_a ? side_b : side_a;
+  const std::vector<Vec3>& mf = mover_is_a ? geometry.feature1 : geometry.feature2;
+  const std::vector<Vec3>& sf = mover_is_a ? geometry.feature2 : geometry.feature1;
+  HeldLink link;
+  link.pair = pair;
+  link.point_pair = true;
+  link.mover = mover_is_a ? a : b;
+  link.support = mover_is_a ? b : a;
+  link.support_piece = mover_is_a ? closest.piece2 : closest.piece1;
+  link.gap = std::max(closest.distance, 0.0);
+  const Mat3 R_M = rotation(mover.state), R_S = rotation(support.state);
+  link.sphere_radius = centred_sphere_radius(mover.geometry);
+  link.support_sphere_radius = centred_sphere_radius(support.geometry);
+  if (link.sphere_radius == 0.0) {
+    if (mf.empty() || mf.size() > 2) return std::nullopt;
+    for (const Vec3& p : mf)
+      link.mover_feature_M.push_back(R_M.transpose() * (p - mover.state.x_W));
+  }
+  if (link.support_sphere_radius == 0.0) {
+    if (sf.empty() || sf.size() > 2) return std::nullopt;
+    for (const Vec3& p : sf)
+      link.support_face_S.push_back(R_S.transpose() * (p - support.state.x_W));
+  }
+  // Two parallel edges: a segment, not a point (no rule holds it).
+  if (link.mover_feature_M.size() == 2 && link.support_face_S.size() == 2) {
+    const Vec3 e1 = mf[1] - mf[0], e2 = sf[1] - sf[0];
+    if (e1.cross(e2).norm() <= 1e-9 * e1.norm() * e2.norm()) return std::nullopt;
+  }
+  const Vec3 n_W = mover_is_a ? closest.n_W : Vec3(-closest.n_W);
+  link.normal_S = R_S.transpose() * n_W;  // the normal now (the fallback where it is undefined)
+  link.t1_S = link.normal_S.unitOrthogonal();
+  return link;
+}
+
+// The closest points of two features, each a point (1), a line through a segment (2): on the
+// mover's (q_m) and on the support's (q_s).
+void closest_core_points(const std::vector<Vec3>& m, const std::vector<Vec3>& s, Vec3& q_m,
+                         Vec3& q_s) {
+  auto on_line = [](const Vec3& p, const Vec3& a, const Vec3& b) {
+    const Vec3 d = b - a;
+    return Vec3(a + d * (d.dot(p - a) / d.squaredNorm()));
+  };
+  if (m.size() == 1 && s.size() == 1) {
+    q_m = m[0];
+    q_s = s[0];
+  } else if (m.size() == 1) {
+    q_m = m[0];
+    q_s = on_line(q_m, s[0], s[1]);
+  } else if (s.size() == 1) {
+    q_s = s[0];
+    q_m = on_line(q_s, m[0], m[1]);
+  } else {
+    // Two lines: p = m0 + u d1, q = s0 + v d2 with p - q normal to both.
+    const Vec3 d1 = m[1] - m[0], d2 = s[1] - s[0], r = m[0] - s[0];
+    const double a = d1.dot(d1), b = d1.dot(d2), c = d2.dot(d2), d = d1.dot(r), e = d2.dot(r);
+    const double den = a * c - b * b;
+    const double u = (b * e - c * d) / den, v = (a * e - b * d) / den;
+    q_m = m[0] + u * d1;
+    q_s = s[0] + v * d2;
+  }
+}
+
+}  // namespace
+
 std::optional<HeldLink> make_held_link(std::uint32_t pair, BodyId a, BodyId b,
                                        const LinkSide& side_a, const LinkSide& side_b,
                                        const DistanceResult& closest,
                                        const ContactGeometry& geometry) {
   const bool plane1 = geometry.unbounded1 || geometry.feature1.size() >= 3;
   const bool plane2 = geometry.unbounded2 || geometry.feature2.size() >= 3;
-  if (!plane1 && !plane2) return std::nullopt;
+  if (!plane1 && !plane2) return point_pair_link(pair, a, b, side_a, side_b, closest, geometry);
   // Body 2's plane faces body 1 along n; body 1's faces body 2 along -n. Face on face: the
   // support is the fixed or kinematic body, or body 2.
   bool support_is_b = plane2;
@@ -135,8 +217,84 @@ std::optional<HeldLink> make_held_link(std::uint32_t pair, BodyId a, BodyId b,
   return link;
 }
 
+namespace {
+
+// The normal of a point-pair link at the given states (from the support's feature to the
+// mover's), its contact point on the mover, and whether the closest points lie on the features.
+bool point_pair_normal(const HeldLink& link, const BodyState& mover, const BodyState& support,
+                       Vec3& n, Vec3& c) {
+  const Mat3 R_M = rotation(mover), R_S = rotation(support);
+  std::vector<Vec3> m, s;
+  if (link.sphere_radius > 0.0) {
+    m.push_back(mover.x_W);
+  } else {
+    for (const Vec3& p : link.mover_feature_M) m.push_back(mover.x_W + R_M * p);
+  }
+  if (link.support_sphere_radius > 0.0) {
+    s.push_back(support.x_W);
+  } else {
+    for (const Vec3& p : link.support_face_S) s.push_back(support.x_W + R_S * p);
+  }
+  Vec3 q_m, q_s;
+  closest_core_points(m, s, q_m, q_s);
+  const Vec3 d = q_m - q_s;
+  const double length = d.norm();
+  n = length > 0.0 ? Vec3(d / length) : Vec3(R_S * link.normal_S);
+  // Across edges the normal is e1 x e2, which keeps its sense while the edges move.
+  if (m.size() == 2 && s.size() == 2 && length == 0.0) {
+    n = (m[1] - m[0]).cross(s[1] - s[0]).normalized();
+    if (n.dot(R_S * link.normal_S) < 0.0) n = -n;
+  }
+  c = q_m - link.sphere_radius * n;
+  // Within the features: a closest point past an edge's end leaves the contact.
+  auto within = [](const std::vector<Vec3>& f, const Vec3& q) {
+    if (f.size() != 2) return true;
+    const Vec3 e = f[1] - f[0];
+    const double u = e.dot(q - f[0]) / e.squaredNorm();
+    return u >= -1e-9 && u <= 1.0 + 1e-9;
+  };
+  return within(m, q_m) && within(s, q_s);
+}
+
+// A body moved rigidly by dt at its present velocities (for the normal's rate).
+BodyState drift(const BodyState& s, double dt) {
+  BodyState out = s;
+  out.x_W += s.v_W * dt;
+  out.q_WM = (rotation_quat(s.w_W * dt) * s.q_WM).normalized();
+  return out;
+}
+
+}  // namespace
+
 bool place_link(const HeldLink& link, const BodyState& mover, const BodyState& support,
                 HeldContact& out) {
+  if (link.point_pair) {
+    Vec3 n, c;
+    if (!point_pair_normal(link, mover, support, n, c)) return false;
+    out.n_W = n;
+    out.t1_W = n.unitOrthogonal();
+    out.t2_W = n.cross(out.t1_W);
+    out.c_W = c;
+    out.sphere_radius = link.sphere_radius;
+    out.patch = PatchKind::kPoint;
+    out.polygon.clear();
+    // The normal's rate by a central difference over the bodies' rigid motion (it depends on
+    // velocities only): steps that move the features by a millionth of their size.
+    const double size = std::max(
+        {link.sphere_radius, link.support_sphere_radius, 1e-3, (mover.x_W - support.x_W).norm()});
+    const double speed =
+        (mover.v_W - support.v_W).norm() + (mover.w_W.norm() + support.w_W.norm()) * size;
+    out.has_n_dot = true;
+    out.n_dot_W.setZero();
+    if (speed > 0.0) {
+      const double dt = 1e-6 * size / speed;
+      Vec3 n_plus, n_minus, c_unused;
+      point_pair_normal(link, drift(mover, dt), drift(support, dt), n_plus, c_unused);
+      point_pair_normal(link, drift(mover, -dt), drift(support, -dt), n_minus, c_unused);
+      out.n_dot_W = (n_plus - n_minus) / (2.0 * dt);
+    }
+    return true;
+  }
   const Mat3 R_S = rotation(support);
   const Mat3 R_M = rotation(mover);
   const Vec3 n = R_S * link.normal_S;
@@ -227,8 +385,9 @@ KnownMotion known_motion(const Body& b, const BodyState& s) {
 }
 
 // The bodies' states at time t: island bodies from `states`, the others extrapolated.
+// `follow`: sliding contacts take the direction of their present relative motion (see below).
 Problem build_problem(const Island& island, const World& world,
-                      const std::vector<BodyState>& states, double t) {
+                      const std::vector<BodyState>& states, double t, bool follow = false) {
   Problem p;
   for (std::size_t k = 0; k < island.bodies.size(); ++k) {
     const Body& b = world.bodies[island.bodies[k].index];
@@ -275,6 +434,21 @@ Problem build_problem(const Island& island, const World& world,
     c.roll_sticks = link.roll_sticks;
     c.roll_dir = link.roll_dir;
     p.contacts.push_back(c);
+  }
+  if (follow) {
+    // Along an integrated motion, what slides is resisted against its present direction (a
+    // slip, spin or rolling that turns); the directions chosen at the plan only start it.
+    const std::vector<HeldContactMotion> now = held_velocities(p.bodies, p.contacts);
+    const double still = world.settings.still_speed_mps;
+    for (std::size_t i = 0; i < p.contacts.size(); ++i) {
+      HeldContact& c = p.contacts[i];
+      const Vec2 slip(now[i].slip_W.dot(c.t1_W), now[i].slip_W.dot(c.t2_W));
+      if (!c.sticks && slip.norm() > still) c.slip_dir = slip.normalized();
+      const double spin = now[i].dw_W.dot(c.n_W);
+      if (!c.spin_sticks && spin != 0.0) c.spin_sign = spin > 0.0 ? 1.0 : -1.0;
+      const Vec2 roll(now[i].dw_W.dot(c.t1_W), now[i].dw_W.dot(c.t2_W));
+      if (!c.roll_sticks && roll.norm() * c.sphere_radius > still) c.roll_dir = roll.normalized();
+    }
   }
   return p;
 }
@@ -418,10 +592,27 @@ Island::PlanResult Island::plan(World& world, const std::vector<const ShapeGeome
       continue;
     }
     if (links.empty()) return result;
-    result.projection_energy += project_held_velocities(p.bodies, p.contacts, still);
+    if (event.link >= 0 && event.link < static_cast<int>(p.contacts.size())) {
+      HeldContact& c = p.contacts[static_cast<std::size_t>(event.link)];
+      c.slip_stopped = event.kind == IslandEvent::Kind::kSlipStop;
+      c.spin_stopped = event.kind == IslandEvent::Kind::kSpinStop;
+      c.roll_stopped = event.kind == IslandEvent::Kind::kRollStop;
+    }
+    std::vector<int> separating;
+    // What separates faster than a microcollision would rebound lets go; slower is held (the
+    // hand-over rule of a collision, DESIGN.md §8.1).
+    const double separation = microcollision_speed(settings, world.gravity_W.norm());
+    result.projection_energy +=
+        project_held_velocities(p.bodies, p.contacts, still, separation, &separating);
     for (std::size_t k = 0; k < bodies.size(); ++k) {
       anchor_[k].v_W = p.bodies[k].v_W;
       anchor_[k].w_W = p.bodies[k].w_W;
+    }
+    if (!separating.empty()) {
+      // Contacts that an impact sent apart let go; the rest are planned again without them.
+      remove_links(separating);
+      event = IslandEvent{};
+      continue;
     }
     if (event.kind == IslandEvent::Kind::kTip && event.link >= 0 &&
         event.link < static_cast<int>(links.size())) {
@@ -606,6 +797,7 @@ void Island::classify(const World& world, const std::vector<const ShapeGeometry*
   }
   for (std::size_t i = 0; i < contacts.size() && uniform; ++i) {
     const HeldContact& c = contacts[i];
+    if (c.has_n_dot && c.n_dot_W.squaredNorm() != 0.0) uniform = false;  // a turning normal
     if (c.support < 0 && !uniform_known(c.support_known)) uniform = false;
     if (c.mover < 0 && !uniform_known(c.mover_known)) uniform = false;
     const HeldContactMotion& m = sol.motion[i];
@@ -643,6 +835,10 @@ void Island::classify(const World& world, const std::vector<const ShapeGeometry*
   }
   motion = Motion::kIntegrated;
   integrate(world, geometry);
+  if (std::getenv("PALPABLE_DEBUG_ISLAND")) {
+    std::fprintf(stderr, "integrated t0 %.17g t_end %.17g steps %zu event %s link %d\n", t0, t_end,
+                 steps_.size(), to_string(event.kind), event.link);
+  }
 }
 
 void Island::find_uniform_event(const World& world, const std::vector<HeldContact>& contacts,
@@ -731,7 +927,7 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
   bool failed = false;
   auto solve_at = [&](double t, const dopri5::State& y, Problem& p) {
     const std::vector<BodyState> states = unpack(y, t);
-    p = build_problem(*this, world, states, t);
+    p = build_problem(*this, world, states, t, /*follow=*/true);
     return solve_held(p.bodies, p.contacts);
   };
   auto rhs = [&](double t, const dopri5::State& y) {
@@ -753,67 +949,100 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
     return dy;
   };
   // The event functions at a state.
+  // `reference`: each contact's slip, spin and rolling at the start of the step (world); a
+  // sliding contact whose slip turns against it within the step has passed through zero.
+  struct Reference {
+    Vec3 slip = Vec3::Zero(), dw = Vec3::Zero();
+  };
+  std::vector<Reference> reference;
+  // A fixed block of event functions per link (their kinds follow the link's modes, which do not
+  // change within a motion), so that the values at two states line up entry by entry.
   auto events = [&](double t, const dopri5::State& y) {
     std::vector<EventValue> out;
     Problem p;
     const HeldSolution s = solve_at(t, y, p);
     const std::vector<BodyState> states = unpack(y, t);
+    const double still_speed = settings.still_speed_mps;
+    const double ftol = 1e-9 * weight;
     for (std::size_t i = 0; i < links.size(); ++i) {
       const HeldContact& c = p.contacts[i];
+      const HeldLink& link = links[i];
       const int li = static_cast<int>(i);
+      const std::size_t block = out.size();
+      out.push_back({IslandEvent::Kind::kLiftOff, li, kInfinity, ftol});
+      out.push_back({IslandEvent::Kind::kTip, li, kInfinity, 1e-12 * size});
+      out.push_back({c.sticks ? IslandEvent::Kind::kSlipStart : IslandEvent::Kind::kSlipStop, li,
+                     kInfinity, c.sticks ? ftol : 0.0});
+      out.push_back({IslandEvent::Kind::kSlipStop, li, kInfinity, 0.0});
+      out.push_back({c.spin_sticks ? IslandEvent::Kind::kSlipStart : IslandEvent::Kind::kSpinStop,
+                     li, kInfinity, c.spin_sticks ? ftol * size : 0.0});
+      out.push_back({IslandEvent::Kind::kSpinStop, li, kInfinity, 0.0});
+      out.push_back({c.roll_sticks ? IslandEvent::Kind::kSlipStart : IslandEvent::Kind::kRollStop,
+                     li, kInfinity, c.roll_sticks ? ftol * size : 0.0});
+      out.push_back({IslandEvent::Kind::kRollStop, li, kInfinity, 0.0});
+      out.push_back({IslandEvent::Kind::kLanding, li, kInfinity, 1e-12 * size});
+      EventValue* e = &out[block];
       if (!c.active) {
-        out.push_back({IslandEvent::Kind::kTip, li, -1.0, 0.0});  // the patch vanished
+        e[1].value = -1.0;  // the patch vanished: the mover left the support's face
         continue;
       }
       const HeldContactForces& f = s.forces[i];
       const HeldContactMotion& m = s.motion[i];
       const double N = f.normal;
-      const double ftol = 1e-9 * weight;
-      out.push_back({IslandEvent::Kind::kLiftOff, li, N, ftol});
+      e[0].value = N;
       // The centre of pressure within the patch (lengths).
       const Vec2& cop = f.centre_of_pressure;
       if (c.patch == PatchKind::kPolygon) {
         double margin = kInfinity;
-        for (std::size_t e = 0; e < c.polygon.size(); ++e) {
-          const Vec2& a = c.polygon[e];
-          const Vec2 d = c.polygon[(e + 1) % c.polygon.size()] - a;
+        for (std::size_t k = 0; k < c.polygon.size(); ++k) {
+          const Vec2& a = c.polygon[k];
+          const Vec2 d = c.polygon[(k + 1) % c.polygon.size()] - a;
           margin = std::min(margin, cross2(d, cop - a) / d.norm());
         }
-        out.push_back({IslandEvent::Kind::kTip, li, margin, 1e-12 * size});
+        e[1].value = margin;
       } else if (c.patch == PatchKind::kSegment) {
         const double along = c.segment_W.dot(c.t1_W) * cop.x() + c.segment_W.dot(c.t2_W) * cop.y();
-        out.push_back({IslandEvent::Kind::kTip, li,
-                       std::min(along - c.segment_lo, c.segment_hi - along), 1e-12 * size});
+        e[1].value = std::min(along - c.segment_lo, c.segment_hi - along);
       }
-      if (c.sticks && c.friction > 0.0) {
-        out.push_back(
-            {IslandEvent::Kind::kSlipStart, li, c.friction * N - f.friction.norm(), ftol});
-      } else if (c.friction > 0.0) {
-        out.push_back({IslandEvent::Kind::kSlipStop, li, plane_coords(c, m.slip_W).dot(c.slip_dir),
-                       settings.still_speed_mps});
+      // Friction: sticking within its cone; sliding until the slip falls to the still speed or
+      // turns against its direction at the step's start (it passed through zero within the
+      // step: a slip that turns as it shrinks spirals into zero in finite time, DESIGN.md §4).
+      const Vec2 slip = plane_coords(c, m.slip_W);
+      if (c.friction > 0.0) {
+        if (c.sticks) {
+          e[2].value = c.friction * N - f.friction.norm();
+        } else {
+          e[2].value = slip.norm() - still_speed;
+          if (i < reference.size()) {
+            e[3].value = slip.dot(plane_coords(c, reference[i].slip).normalized());
+          }
+        }
       }
       if (c.torsion_arm > 0.0) {
+        const double spin = m.dw_W.dot(c.n_W);
         if (c.spin_sticks) {
-          out.push_back({IslandEvent::Kind::kSlipStart, li, c.torsion_arm * N - std::abs(f.torsion),
-                         ftol * size});
+          e[4].value = c.torsion_arm * N - std::abs(f.torsion);
         } else {
-          out.push_back({IslandEvent::Kind::kSpinStop, li, m.dw_W.dot(c.n_W) * c.spin_sign,
-                         settings.still_speed_mps / size});
+          e[4].value = std::abs(spin) * size - still_speed;
+          if (i < reference.size()) {
+            e[5].value = spin * (reference[i].dw.dot(c.n_W) >= 0.0 ? 1.0 : -1.0);
+          }
         }
       }
       if (c.patch == PatchKind::kPoint && c.rolling_resistance > 0.0) {
+        const Vec2 roll = plane_coords(c, m.dw_W);
         if (c.roll_sticks) {
-          out.push_back({IslandEvent::Kind::kSlipStart, li,
-                         c.rolling_resistance * N - f.rolling.norm(), ftol * size});
+          e[6].value = c.rolling_resistance * N - f.rolling.norm();
         } else {
-          out.push_back({IslandEvent::Kind::kRollStop, li, plane_coords(c, m.dw_W).dot(c.roll_dir),
-                         settings.still_speed_mps / size});
+          e[6].value = roll.norm() * c.sphere_radius - still_speed;
+          if (i < reference.size()) {
+            e[7].value = roll.dot(plane_coords(c, reference[i].dw).normalized());
+          }
         }
       }
-      // Another vertex of a polyhedral mover reaching the plane (above the support's face).
-      const HeldLink& link = links[i];
+      // Another vertex of a polyhedral mover reaching the plane.
       const int km = index_of(link.mover);
-      if (link.sphere_radius > 0.0 || km < 0) continue;
+      if (link.sphere_radius > 0.0 || km < 0 || link.point_pair) continue;
       const ShapeGeometry& g = *geometry[link.mover.index];
       if (g.pieces().size() != 1 || !g.pieces()[0].mesh) continue;
       const ShapeGeometry::Piece& piece = g.pieces()[0];
@@ -827,10 +1056,7 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
         // Not the held feature itself (within the envelope of the plane now).
         if (h > settings.envelope_m) lowest = std::min(lowest, h);
       }
-      if (std::isfinite(lowest)) {
-        out.push_back(
-            {IslandEvent::Kind::kLanding, li, lowest - 0.5 * settings.envelope_m, 1e-12 * size});
-      }
+      e[8].value = lowest - 0.5 * settings.envelope_m;
     }
     return out;
   };
@@ -840,6 +1066,13 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
   dopri5::State k0 = rhs(t, y);
   const double cap = t0 + settings.broad_phase_horizon_s;
   double h = std::min(1e-3, cap - t);
+  auto set_reference = [&](double time, const dopri5::State& state) {
+    Problem p = build_problem(*this, world, unpack(state, time), time, /*follow=*/true);
+    const std::vector<HeldContactMotion> m = held_velocities(p.bodies, p.contacts);
+    reference.resize(m.size());
+    for (std::size_t i = 0; i < m.size(); ++i) reference[i] = Reference{m[i].slip_W, m[i].dw_W};
+  };
+  set_reference(t, y);
   std::vector<EventValue> g_prev = events(t, y);
   dopri5::Step step;
   std::vector<double> w_max(bodies.size(), 0.0), a_max(bodies.size(), 0.0);
@@ -864,7 +1097,6 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
     double theta_event = 2.0;
     IslandEvent found;
     for (std::size_t j = 0; j < g_new.size() && j < g_prev.size(); ++j) {
-      if (g_new[j].kind != g_prev[j].kind || g_new[j].link != g_prev[j].link) continue;
       if (!(g_prev[j].value >= -g_prev[j].tolerance && g_new[j].value < -g_new[j].tolerance)) {
         continue;
       }
@@ -890,6 +1122,10 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
           {w_max[k], step.y0.segment<3>(o + 10).norm(), step.y1.segment<3>(o + 10).norm()});
     }
     steps_.push_back(step);
+    if (std::getenv("PALPABLE_DEBUG_ISLAND") && steps_.size() % 2000 == 0) {
+      std::fprintf(stderr, "  step %zu t %.17g h %.3g err %.3g rejected %d\n", steps_.size(), t, h,
+                   step.error, rejected);
+    }
     if (theta_event <= 1.0) {
       t_end = t + theta_event * h;
       event = found;
@@ -898,7 +1134,8 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
     t += h;
     y = step.y1;
     k0 = step.k[6];
-    g_prev = g_new;
+    set_reference(t, y);
+    g_prev = events(t, y);
     h = dopri5::next_step_size(h, step.error);
   }
   if (failed) {

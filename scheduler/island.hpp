@@ -49,6 +49,12 @@ struct HeldLink {
   Vec3 point_S = Vec3::Zero();    // a point of the plane
   Vec3 t1_S = Vec3::UnitX();      // a tangent fixed in the support: slip directions refer to it
   double gap = 0.0;               // the gap held [m] (the mover's feature above the plane)
+  // Neither side offers a plane (two spheres, a sphere or a vertex on an edge, an edge across an
+  // edge): a point contact along the line between the two features' closest points. The
+  // support's feature is then in support_face_S (1 point, or 2 for an edge; empty for a sphere of
+  // radius support_sphere_radius about its origin), and the normal turns with the features.
+  bool point_pair = false;
+  double support_sphere_radius = 0.0;
   // Modes, carried from one plan to the next (see HeldContact).
   bool sticks = true;
   Vec2 slip_dir = Vec2::UnitX();
@@ -66,9 +72,9 @@ struct LinkSide {
 };
 
 // The link of a pair to be held, from the query at its collision: which body owns the plane (a
-// face or a halfspace facing the other body), and the other's contact feature. nullopt where
-// neither side offers a plane (an edge across an edge, a sphere on an edge or a vertex, two
-// spheres): those stay collisions.
+// face or a halfspace facing the other body), and the other's contact feature; where neither side
+// offers a plane, the two features of a point contact. nullopt for two parallel edges without a
+// plane (held by neither rule: they stay collisions).
 std::optional<HeldLink> make_held_link(std::uint32_t pair, BodyId a, BodyId b,
                                        const LinkSide& side_a, const LinkSide& side_b,
                                        const DistanceResult& closest,

@@ -10,6 +10,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <map>
 
 namespace palpable {
@@ -133,6 +135,12 @@ struct Simulation::Impl {
                          Pose{s2.x_W, s2.q_WM}, p.cache, settings().distance_max_steps);
     stats.feature_steps += static_cast<std::uint64_t>(dr.steps);
     if (dr.status == ContactStatus::kPenetrating) ++stats.penetrations;
+    if (dr.status == ContactStatus::kPenetrating && std::getenv("PALPABLE_DEBUG_ISLAND") &&
+        stats.penetrations % 100000 == 1) {
+      std::fprintf(stderr, "penetrating %s-%s t %.17g pieces %d %d islands %d %d held %d\n",
+                   body(p.a).name.c_str(), body(p.b).name.c_str(), now, dr.piece1, dr.piece2,
+                   island_of[p.a.index], island_of[p.b.index], p.held ? 1 : 0);
+    }
     // DESIGN.md §5 step 6: no penetration deeper than the envelope (a polyhedron pair's depth is
     // unknown here: any overlap of one fails).
     PALPABLE_DCHECK(
@@ -142,14 +150,41 @@ struct Simulation::Impl {
     return dr;
   }
 
+  // Is piece result r of pair p held (a compound's piece on which a link of p rests)? A pair
+  // with a compound keeps its events for its other pieces (a ball held on the floor of a table
+  // still meets its cushions); a plain held pair has none.
+  bool held_piece(const PairSet::Pair& p, const DistanceResult& r) const {
+    for (BodyId id : {p.a, p.b}) {
+      const Island* is = island(id);
+      if (!is) continue;
+      for (const HeldLink& link : is->links) {
+        if (!(std::min(link.mover, link.support) == p.a &&
+              std::max(link.mover, link.support) == p.b)) {
+          continue;
+        }
+        const int piece = link.support == p.a ? r.piece1 : r.piece2;
+        if (piece == link.support_piece) return true;
+      }
+    }
+    return false;
+  }
+
   // The piece-pair result a collision would be resolved at: `dr` itself, or, for a pair with a
   // compound, the piece within the envelope approaching fastest (a ball in a crease touches two
-  // pieces; the closest may be the one it is leaving).
+  // pieces; the closest may be the one it is leaving), else the closest piece; held pieces
+  // never.
   const DistanceResult& contact_result(const PairSet::Pair& p, const BodyState& s1,
                                        const BodyState& s2, const DistanceResult& dr) const {
     const DistanceResult* best = &dr;
+    const DistanceResult* nearest = nullptr;
     double best_u_n = kInfinity;
+    const bool any_held = p.held || island(p.a) || island(p.b);
     for (const DistanceResult& r : p.cache.piece_results()) {
+      if (any_held && held_piece(p, r)) continue;
+      if (r.status != ContactStatus::kFailed &&
+          (!nearest || r.distance < nearest->distance || r.status == ContactStatus::kPenetrating)) {
+        nearest = &r;
+      }
       if (r.status == ContactStatus::kFailed ||
           (r.status != ContactStatus::kPenetrating && r.distance > settings().envelope_m)) {
         continue;
@@ -161,6 +196,7 @@ struct Simulation::Impl {
         best = &r;
       }
     }
+    if (best == &dr && nearest && any_held && held_piece(p, dr)) return *nearest;
     return *best;
   }
 
@@ -191,6 +227,7 @@ struct Simulation::Impl {
     if (p.cache.piece_results().empty()) return toi_bound(m1, m2, dr, d_target, settings());
     ToiBound best;
     for (const DistanceResult& piece : p.cache.piece_results()) {
+      if (held_piece(p, piece)) continue;
       const ToiBound b = toi_bound(m1, m2, piece, d_target, settings());
       if (b.dt < best.dt) best = b;
     }
@@ -228,6 +265,13 @@ struct Simulation::Impl {
             : time_of_impact(body(p.a), s1, pairs.geometry(p.a), body(p.b), s2, pairs.geometry(p.b),
                              dr, p.cache, world.gravity_W, settings());
     if (bound.floored) ++stats.floored_bounds;
+    if (bound.floored && std::getenv("PALPABLE_DEBUG_ISLAND") &&
+        stats.floored_bounds % 50000 == 1) {
+      std::fprintf(stderr, "floored %s-%s t %.17g d %.3g b %.3g a %.3g islands %d %d\n",
+                   body(p.a).name.c_str(), body(p.b).name.c_str(), t, dr.distance,
+                   bound.closing_speed, bound.closing_accel, island_of[p.a.index],
+                   island_of[p.b.index]);
+    }
     if (bound.exact) ++stats.exact_bounds;
     if (bound.exact && resting && bound.dt < floor) {
       // An exact time of impact of zero for a pair at rest in contact (an e = 0 collision without
@@ -236,6 +280,13 @@ struct Simulation::Impl {
       return kInfinity;
     }
     if (!(bound.dt >= 0.0)) return t + floor;  // NaN guard: never stall, never skip
+    if (std::getenv("PALPABLE_DEBUG_PAIR") &&
+        body(p.a).name + "-" + body(p.b).name == std::getenv("PALPABLE_DEBUG_PAIR")) {
+      std::fprintf(stderr, "bound %s-%s t %.17g d %.6g dt %.6g b %.4g a %.4g islands %d %d\n",
+                   body(p.a).name.c_str(), body(p.b).name.c_str(), t, dr.distance, bound.dt,
+                   bound.closing_speed, bound.closing_accel, island_of[p.a.index],
+                   island_of[p.b.index]);
+    }
     // The progress floor is applied (capped, so that it never carries a pair through contact)
     // by the bound itself; here only the resolution of the clock, so that t + dt > t.
     const double tick = 1e-12 * std::max(1.0, t);
@@ -381,22 +432,45 @@ struct Simulation::Impl {
   // Under the persistent contact model (DESIGN.md §8.1): the collision is integrated with the
   // material's restitution and no rebound floor (plastic if it arrives slower than the
   // microcollision speed: what would have started a microcollision train); if the contact then
-  // separates slower than the microcollision speed, it is held.
+  // separates slower than the microcollision speed, it is held. A contact whose features offer no
+  // plane (two spheres, a sphere on an edge) cannot be held: it stays a microcollision train, as
+  // under Mirtich's model.
   CollisionRecord collide_or_hold(std::uint32_t index, Contact& c, const DistanceResult& dr,
                                   double t) {
+    PairSet::Pair& p = pairs.pair(index);
+    const BodyId a = p.a, b = p.b;
+    const std::optional<HeldLink> link = link_of(index, dr);
     const bool gentle =
         -initial_normal_velocity(c) <= c.v_micro * (1.0 + settings().microcollision_speed_slack);
     ResolveOptions options;
-    options.microcollisions = false;
-    if (gentle) options.restitution = 0.0;
-    PairSet::Pair& p = pairs.pair(index);
-    const BodyId a = p.a, b = p.b;
+    options.microcollisions = !link;
+    if (gentle && link) options.restitution = 0.0;
     CollisionRecord record = collide(p, c, t, options);
+    if (std::getenv("PALPABLE_DEBUG_ISLAND")) {
+      std::fprintf(stderr, "collide %s-%s t %.17g u %.3g link %d gentle %d piece %d %d\n",
+                   body(a).name.c_str(), body(b).name.c_str(), t, record.approach_speed,
+                   link ? 1 : 0, gentle ? 1 : 0, dr.piece1, dr.piece2);
+    }
     const Vec3 u_after =
         point_velocity_W(body(a).state, record.p_W) - point_velocity_W(body(b).state, record.p_W);
-    const bool held = u_after.dot(record.n_W) < c.v_micro && hold(index, dr, t);
-    if (!held) after_collision(record, t);
+    if (link && u_after.dot(record.n_W) < c.v_micro) {
+      hold(index, *link, dr, t);
+    } else {
+      after_collision(record, t);
+    }
     return record;
+  }
+
+  // The link that would hold pair `index`'s contact (closest features `dr`, states at t).
+  std::optional<HeldLink> link_of(std::uint32_t index, const DistanceResult& dr) const {
+    const PairSet::Pair& p = pairs.pair(index);
+    const Body& ba = body(p.a);
+    const Body& bb = body(p.b);
+    const ContactGeometry g = contact_geometry(
+        pairs.geometry(p.a), Pose{ba.state.x_W, ba.state.q_WM}, pairs.geometry(p.b),
+        Pose{bb.state.x_W, bb.state.q_WM}, dr, settings().envelope_m);
+    return make_held_link(index, p.a, p.b, LinkSide{ba, pairs.geometry(p.a), ba.state},
+                          LinkSide{bb, pairs.geometry(p.b), bb.state}, dr, g);
   }
 
   // A collision changed the velocities of these bodies: islands re-plan, free bodies re-bound.
@@ -414,31 +488,23 @@ struct Simulation::Impl {
     refresh_after_collision(free_part, t);
   }
 
-  // Holds the contact of pair `index` (closest features `dr`, states committed at t): its link
-  // joins the island of its dynamic bodies. False if its features offer no plane.
-  bool hold(std::uint32_t index, const DistanceResult& dr, double t) {
+  // Holds the contact of pair `index` (states committed at t): its link joins the island of its
+  // dynamic bodies.
+  void hold(std::uint32_t index, const HeldLink& link, const DistanceResult& dr, double t) {
     PairSet::Pair& p = pairs.pair(index);
-    const Body& ba = body(p.a);
-    const Body& bb = body(p.b);
-    const ContactGeometry g = contact_geometry(
-        pairs.geometry(p.a), Pose{ba.state.x_W, ba.state.q_WM}, pairs.geometry(p.b),
-        Pose{bb.state.x_W, bb.state.q_WM}, dr, settings().envelope_m);
-    const std::optional<HeldLink> link =
-        make_held_link(index, p.a, p.b, LinkSide{ba, pairs.geometry(p.a), ba.state},
-                       LinkSide{bb, pairs.geometry(p.b), bb.state}, dr, g);
-    if (!link) return false;
     std::vector<BodyId> dynamic;
     for (BodyId id : {p.a, p.b}) {
       if (body(id).is_dynamic()) dynamic.push_back(id);
     }
     const std::uint32_t i = join(dynamic, t);
-    islands[i].links.push_back(*link);
-    p.held = true;
-    schedule_pair(index, kInfinity);
+    islands[i].links.push_back(link);
+    if (p.cache.piece_results().empty()) {
+      p.held = true;
+      schedule_pair(index, kInfinity);
+    }
     ++stats.holds;
     report("hold", p.a, p.b, dr.p2_W, t);
     replan(i, t);
-    return true;
   }
 
   // The island holding all of `ids` (dynamic bodies): theirs merged, or a new one.
@@ -500,6 +566,10 @@ struct Simulation::Impl {
   // splits it where its links no longer connect it, frees bodies held by nothing, queues its next
   // event and refreshes its bodies' boxes and bounds.
   void replan(std::uint32_t i, double t) {
+    if (std::getenv("PALPABLE_DEBUG_ISLAND")) {
+      std::fprintf(stderr, "replan island %u at %.17g (%zu bodies, %zu links)\n", i, t,
+                   islands[i].bodies.size(), islands[i].links.size());
+    }
     std::vector<BodyId> touched = islands[i].bodies;
     for (BodyId id : touched) commit(id, t);
     std::vector<std::uint32_t> todo{i};
@@ -516,7 +586,12 @@ struct Simulation::Impl {
         q.held = false;
         report("release", q.a, q.b, body(q.a).state.x_W, t);
       }
-      for (std::uint32_t extra : split(k, t)) todo.push_back(extra);
+      bool changed = false;
+      for (std::uint32_t extra : split(k, t, changed)) todo.push_back(extra);
+      if (changed) {
+        todo.push_back(k);  // its motion was planned with bodies it no longer has
+        continue;
+      }
       schedule_island(k, t);
     }
     for (BodyId id : touched) {
@@ -528,8 +603,9 @@ struct Simulation::Impl {
   // Splits island k into the components its links connect; bodies no link holds leave it (free
   // flight from their state at t). Returns the new islands (to be planned); island k keeps the
   // component of its first link.
-  std::vector<std::uint32_t> split(std::uint32_t k, double t) {
+  std::vector<std::uint32_t> split(std::uint32_t k, double t, bool& changed) {
     std::vector<std::uint32_t> made;
+    changed = false;
     Island& is = islands[k];
     if (is.links.empty()) {
       for (BodyId id : is.bodies) island_of[id.index] = -1;
@@ -569,6 +645,7 @@ struct Simulation::Impl {
       }
     }
     if (others.empty() && keep.size() == is.bodies.size()) return made;
+    changed = true;
     std::sort(others.begin(), others.end(), [](const auto& x, const auto& y) {
       return x.first < y.first || (x.first == y.first && x.second < y.second);
     });
