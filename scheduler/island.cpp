@@ -387,7 +387,8 @@ KnownMotion known_motion(const Body& b, const BodyState& s) {
 // The bodies' states at time t: island bodies from `states`, the others extrapolated.
 // `follow`: sliding contacts take the direction of their present relative motion (see below).
 Problem build_problem(const Island& island, const World& world,
-                      const std::vector<BodyState>& states, double t, bool follow = false) {
+                      const std::vector<BodyState>& states, double t, bool follow = false,
+                      double slip_floor = 0.0) {
   Problem p;
   for (std::size_t k = 0; k < island.bodies.size(); ++k) {
     const Body& b = world.bodies[island.bodies[k].index];
@@ -439,13 +440,16 @@ Problem build_problem(const Island& island, const World& world,
     // Along an integrated motion, what slides is resisted against its present direction (a
     // slip, spin or rolling that turns); the directions chosen at the plan only start it.
     const std::vector<HeldContactMotion> now = held_velocities(p.bodies, p.contacts);
-    const double still = world.settings.still_speed_mps;
+    const double still = std::max(world.settings.still_speed_mps, slip_floor);
     for (std::size_t i = 0; i < p.contacts.size(); ++i) {
       HeldContact& c = p.contacts[i];
       const Vec2 slip(now[i].slip_W.dot(c.t1_W), now[i].slip_W.dot(c.t2_W));
       if (!c.sticks && slip.norm() > still) c.slip_dir = slip.normalized();
       const double spin = now[i].dw_W.dot(c.n_W);
-      if (!c.spin_sticks && spin != 0.0) c.spin_sign = spin > 0.0 ? 1.0 : -1.0;
+      if (!c.spin_sticks &&
+          std::abs(spin) * (c.torsion_arm / std::max(c.friction, 1e-300)) > still) {
+        c.spin_sign = spin > 0.0 ? 1.0 : -1.0;
+      }
       const Vec2 roll(now[i].dw_W.dot(c.t1_W), now[i].dw_W.dot(c.t2_W));
       if (!c.roll_sticks && roll.norm() * c.sphere_radius > still) c.roll_dir = roll.normalized();
     }
@@ -562,6 +566,45 @@ bool swap_roles(HeldLink& link, int edge, const BodyState& mover, const BodyStat
 
 }  // namespace
 
+namespace {
+
+// A plane link whose mover's vertex or edge slid off the support's face: the same contact, now
+// between that feature and the face's boundary edge nearest to it. False for a face, a sphere, or
+// an unbounded support (nothing to slide off).
+bool to_point_pair(HeldLink& link, const BodyState& mover, const BodyState& support) {
+  const std::size_t n = link.support_face_S.size();
+  if (link.point_pair || link.sphere_radius > 0.0 || n < 3 || link.mover_feature_M.empty() ||
+      link.mover_feature_M.size() > 2) {
+    return false;
+  }
+  const Mat3 R_M = rotation(mover), R_S = rotation(support);
+  std::vector<Vec3> m;
+  for (const Vec3& q : link.mover_feature_M) m.push_back(mover.x_W + R_M * q);
+  double best = kInfinity;
+  std::size_t edge = 0;
+  for (std::size_t e = 0; e < n; ++e) {
+    const std::vector<Vec3> s = {support.x_W + R_S * link.support_face_S[e],
+                                 support.x_W + R_S * link.support_face_S[(e + 1) % n]};
+    if (m.size() == 2 && (m[1] - m[0]).cross(s[1] - s[0]).norm() <=
+                             1e-9 * (m[1] - m[0]).norm() * (s[1] - s[0]).norm()) {
+      continue;  // parallel: no point contact
+    }
+    Vec3 q_m, q_s;
+    closest_core_points(m, s, q_m, q_s);
+    const double d = (q_m - q_s).norm();
+    if (d < best) {
+      best = d;
+      edge = e;
+    }
+  }
+  if (!std::isfinite(best)) return false;
+  link.support_face_S = {link.support_face_S[edge], link.support_face_S[(edge + 1) % n]};
+  link.point_pair = true;
+  return true;
+}
+
+}  // namespace
+
 Island::PlanResult Island::plan(World& world, const std::vector<const ShapeGeometry*>& geometry,
                                 double t) {
   PlanResult result;
@@ -583,12 +626,31 @@ Island::PlanResult Island::plan(World& world, const std::vector<const ShapeGeome
       links.erase(links.begin() + *it);
     }
   };
+  auto state_of = [&](BodyId id) -> BodyState {
+    const int k = index_of(id);
+    return k >= 0 ? anchor_[static_cast<std::size_t>(k)] : world.bodies[id.index].state;
+  };
   HeldModes modes;
   Problem p;
+  std::vector<HeldContact> before;  // the contacts before the modes are chosen
   for (int attempt = 0;; ++attempt) {
+    bool forced = false;
     p = build_problem(*this, world, anchor_, t);
+    if (std::getenv("PALPABLE_DEBUG_ISLAND")) {
+      for (int lost : p.lost) std::fprintf(stderr, "  link %d lost its patch\n", lost);
+    }
     if (!p.lost.empty()) {
-      remove_links(p.lost);
+      // A vertex or an edge that slid off the support's face keeps touching its boundary: the
+      // contact goes on as a point contact with the boundary edge nearest to it; a face that
+      // left it, lets go.
+      std::vector<int> drop;
+      for (int lost : p.lost) {
+        HeldLink& link = links[static_cast<std::size_t>(lost)];
+        if (!to_point_pair(link, state_of(link.mover), state_of(link.support))) {
+          drop.push_back(lost);
+        }
+      }
+      remove_links(drop);
       continue;
     }
     if (links.empty()) return result;
@@ -608,6 +670,9 @@ Island::PlanResult Island::plan(World& world, const std::vector<const ShapeGeome
       anchor_[k].v_W = p.bodies[k].v_W;
       anchor_[k].w_W = p.bodies[k].w_W;
     }
+    if (std::getenv("PALPABLE_DEBUG_ISLAND")) {
+      for (int i : separating) std::fprintf(stderr, "  link %d separates\n", i);
+    }
     if (!separating.empty()) {
       // Contacts that an impact sent apart let go; the rest are planned again without them.
       remove_links(separating);
@@ -624,15 +689,40 @@ Island::PlanResult Island::plan(World& world, const std::vector<const ShapeGeome
           k_m >= 0 ? anchor_[static_cast<std::size_t>(k_m)] : world.bodies[link.mover.index].state;
       const BodyState ss = k_s >= 0 ? anchor_[static_cast<std::size_t>(k_s)]
                                     : world.bodies[link.support.index].state;
-      HeldContact c = p.contacts[static_cast<std::size_t>(event.link)];
-      const int edge = support_edge_under(link, ss, contact_points_W(c));
+      const std::size_t li = static_cast<std::size_t>(event.link);
+      const HeldContact& c = p.contacts[li];
+      const Vec2 cop = solve_held(p.bodies, p.contacts).forces[li].centre_of_pressure;
+      const int edge = support_edge_under(link, ss, {c.c_W + cop.x() * c.t1_W + cop.y() * c.t2_W});
       event = IslandEvent{};
-      if (edge < 0 || !swap_roles(link, edge, sm, ss)) {
-        remove_links({static_cast<int>(&link - links.data())});
+      if (edge >= 0) {
+        if (!swap_roles(link, edge, sm, ss)) remove_links({static_cast<int>(li)});
+        continue;
       }
-      continue;
+      // Else it reached the boundary of the mover's own feature: the body tips about the edge
+      // (or end) nearest to the centre of pressure. (At the event the pressure is on that
+      // boundary to the integration's accuracy: the choice of modes alone may not see it cross.)
+      before = p.contacts;
+      HeldContact& t = p.contacts[li];
+      if (t.patch == PatchKind::kPolygon) {
+        int nearest = 0;
+        double margin = kInfinity;
+        for (std::size_t e = 0; e < t.polygon.size(); ++e) {
+          const Vec2& a = t.polygon[e];
+          const Vec2 d = t.polygon[(e + 1) % t.polygon.size()] - a;
+          const double m = cross2(d, cop - a) / d.norm();
+          if (m < margin) {
+            margin = m;
+            nearest = static_cast<int>(e);
+          }
+        }
+        reduce_patch(t, nearest);
+      } else if (t.patch == PatchKind::kSegment) {
+        const double along = t.segment_W.dot(t.t1_W) * cop.x() + t.segment_W.dot(t.t2_W) * cop.y();
+        reduce_patch(t, along - t.segment_lo < t.segment_hi - along ? 0 : 1);
+      }
+      forced = true;
     }
-    std::vector<HeldContact> before = p.contacts;
+    if (!forced) before = p.contacts;
     modes = choose_held_modes(p.bodies, p.contacts, still, 1e-9);
     if (modes.solution.status != HeldStatus::kOk) {
       result.inconsistent = true;
@@ -676,6 +766,9 @@ Island::PlanResult Island::plan(World& world, const std::vector<const ShapeGeome
     const HeldContact& c = p.contacts[i];
     HeldLink& link = links[i];
     if (!c.active) {
+      if (std::getenv("PALPABLE_DEBUG_ISLAND")) {
+        std::fprintf(stderr, "  link %zu lets go (N %.3g)\n", i, modes.solution.forces[i].normal);
+      }
       released.push_back(static_cast<int>(i));
       continue;
     }
@@ -697,6 +790,18 @@ Island::PlanResult Island::plan(World& world, const std::vector<const ShapeGeome
   p = build_problem(*this, world, anchor_, t);
   const HeldSolution sol = solve_held(p.bodies, p.contacts);
   classify(world, geometry, p.contacts, sol);
+  if (std::getenv("PALPABLE_DEBUG_ISLAND")) {
+    static const char* names[] = {"rest", "uniform", "turntable", "integrated"};
+    std::fprintf(stderr, "%s t0 %.17g t_end %.17g steps %zu event %s link %d\n",
+                 names[static_cast<int>(motion)], t0, t_end, steps_.size(), to_string(event.kind),
+                 event.link);
+    for (std::size_t i = 0; i < p.contacts.size(); ++i) {
+      const HeldContact& c = p.contacts[i];
+      std::fprintf(stderr, "   contact %zu patch %d sticks %d N %.4g n %.3f %.3f %.3f gap %.3g\n",
+                   i, static_cast<int>(c.patch), c.sticks ? 1 : 0, sol.forces[i].normal, c.n_W.x(),
+                   c.n_W.y(), c.n_W.z(), links[i].gap);
+    }
+  }
   for (std::size_t k = 0; k < bodies.size(); ++k) world.bodies[bodies[k].index].state = anchor_[k];
   return result;
 }
@@ -835,10 +940,6 @@ void Island::classify(const World& world, const std::vector<const ShapeGeometry*
   }
   motion = Motion::kIntegrated;
   integrate(world, geometry);
-  if (std::getenv("PALPABLE_DEBUG_ISLAND")) {
-    std::fprintf(stderr, "integrated t0 %.17g t_end %.17g steps %zu event %s link %d\n", t0, t_end,
-                 steps_.size(), to_string(event.kind), event.link);
-  }
 }
 
 void Island::find_uniform_event(const World& world, const std::vector<HeldContact>& contacts,
@@ -924,10 +1025,18 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
   }
   if (!(weight > 0.0)) weight = 1.0;
   if (!(size > 0.0 && std::isfinite(size))) size = 1.0;
+  // Below this relative speed a slip (spin, rolling) counts as stopped along an integrated
+  // motion: the integration resolves speeds to its tolerance times the motion's speed scale, and
+  // a slip smaller than that only chatters in direction from step to step.
+  double speed_scale = std::sqrt(world.gravity_W.norm() * size);
+  for (std::size_t k = 0; k < bodies.size(); ++k) {
+    speed_scale = std::max(speed_scale, anchor_[k].v_W.norm() + anchor_[k].w_W.norm() * size);
+  }
+  const double slip_floor = std::max(settings.still_speed_mps, 1e3 * rtol * speed_scale);
   bool failed = false;
   auto solve_at = [&](double t, const dopri5::State& y, Problem& p) {
     const std::vector<BodyState> states = unpack(y, t);
-    p = build_problem(*this, world, states, t, /*follow=*/true);
+    p = build_problem(*this, world, states, t, /*follow=*/true, slip_floor);
     return solve_held(p.bodies, p.contacts);
   };
   auto rhs = [&](double t, const dopri5::State& y) {
@@ -962,7 +1071,7 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
     Problem p;
     const HeldSolution s = solve_at(t, y, p);
     const std::vector<BodyState> states = unpack(y, t);
-    const double still_speed = settings.still_speed_mps;
+    const double still_speed = slip_floor;
     const double ftol = 1e-9 * weight;
     for (std::size_t i = 0; i < links.size(); ++i) {
       const HeldContact& c = p.contacts[i];
@@ -1049,14 +1158,21 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
       const BodyState& sm = states[static_cast<std::size_t>(km)];
       const Mat3 R = rotation(sm) * piece.R_M;
       const Vec3 origin = sm.x_W + rotation(sm) * piece.p_M;
+      // Its height against the held feature's: it lands when it comes halfway down from the
+      // feature's height to the plane (a vertex level with the feature now, as when the body
+      // has just tipped onto an edge or a corner of a face, must go down to land).
       double lowest = kInfinity;
+      const double tol = 1e-9 * size;
       for (int v = 0; v < piece.mesh->num_vertices(); ++v) {
+        const Vec3 q_M = piece.p_M + piece.R_M * piece.mesh->vertex(v);
+        bool held_vertex = false;
+        for (const Vec3& f : link.mover_feature_M)
+          held_vertex = held_vertex || (f - q_M).norm() <= tol;
+        if (held_vertex) continue;
         const Vec3 q = origin + R * piece.mesh->vertex(v);
-        const double h = c.n_W.dot(q - c.c_W);
-        // Not the held feature itself (within the envelope of the plane now).
-        if (h > settings.envelope_m) lowest = std::min(lowest, h);
+        lowest = std::min(lowest, c.n_W.dot(q - c.c_W));
       }
-      e[8].value = lowest - 0.5 * settings.envelope_m;
+      e[8].value = lowest + 0.5 * link.gap;
     }
     return out;
   };
@@ -1067,7 +1183,7 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
   const double cap = t0 + settings.broad_phase_horizon_s;
   double h = std::min(1e-3, cap - t);
   auto set_reference = [&](double time, const dopri5::State& state) {
-    Problem p = build_problem(*this, world, unpack(state, time), time, /*follow=*/true);
+    Problem p = build_problem(*this, world, unpack(state, time), time, /*follow=*/true, slip_floor);
     const std::vector<HeldContactMotion> m = held_velocities(p.bodies, p.contacts);
     reference.resize(m.size());
     for (std::size_t i = 0; i < m.size(); ++i) reference[i] = Reference{m[i].slip_W, m[i].dw_W};
@@ -1080,7 +1196,10 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
   t_end = cap;
   event = IslandEvent{IslandEvent::Kind::kSegmentEnd, -1};
   int rejected = 0;
-  while (t < cap && !failed) {
+  // A segment of at most this many steps (its dense output is kept): a motion that needs more is
+  // re-planned where it ends, so memory stays bounded whatever the motion does.
+  constexpr std::size_t kMaxSteps = 4096;
+  while (t < cap && !failed && steps_.size() < kMaxSteps) {
     h = std::min(h, cap - t);
     dopri5::take_step(rhs, t, y, k0, h, rtol, atol, step);
     if (failed) break;
@@ -1122,6 +1241,20 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
           {w_max[k], step.y0.segment<3>(o + 10).norm(), step.y1.segment<3>(o + 10).norm()});
     }
     steps_.push_back(step);
+    if (std::getenv("PALPABLE_DEBUG_STEPS")) {
+      Problem q;
+      const HeldSolution sq = solve_at(t + h, step.y1, q);
+      if (!q.contacts.empty()) {
+        const HeldContactMotion& m = sq.motion[0];
+        std::fprintf(stderr,
+                     "    h %.3g err %.3g slip %.3e spin %.3e N %.4g a %.3e patch %d sticks %d "
+                     "spin_sticks %d\n",
+                     h, step.error, plane_coords(q.contacts[0], m.slip_W).norm(),
+                     m.dw_W.dot(q.contacts[0].n_W), sq.forces[0].normal, sq.a_W[0].norm(),
+                     static_cast<int>(q.contacts[0].patch), q.contacts[0].sticks ? 1 : 0,
+                     q.contacts[0].spin_sticks ? 1 : 0);
+      }
+    }
     if (std::getenv("PALPABLE_DEBUG_ISLAND") && steps_.size() % 2000 == 0) {
       std::fprintf(stderr, "  step %zu t %.17g h %.3g err %.3g rejected %d\n", steps_.size(), t, h,
                    step.error, rejected);
@@ -1138,6 +1271,7 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
     g_prev = events(t, y);
     h = dopri5::next_step_size(h, step.error);
   }
+  if (steps_.size() >= kMaxSteps && event.kind == IslandEvent::Kind::kSegmentEnd) t_end = t;
   if (failed) {
     // The contact problem broke down along the way: end the segment where it last held.
     t_end = steps_.empty() ? t0 : steps_.back().t + steps_.back().h;

@@ -439,12 +439,19 @@ struct Simulation::Impl {
                                   double t) {
     PairSet::Pair& p = pairs.pair(index);
     const BodyId a = p.a, b = p.b;
-    const std::optional<HeldLink> link = link_of(index, dr);
+    // A pair colliding again at the same instant is one whose bodies' other contacts (held, and
+    // resolved after it, not with it) keep sending it back: a train of rebounds shrinking by the
+    // restitution. Its limit is the plastic collision, taken at once from the third round; from
+    // the fifth, a hold that keeps letting go at once gives way to a microcollision, whose
+    // rebound floor moves the pair on in time.
+    const int round = t == p.last_collision_t ? p.collisions_at_t : 0;
+    const std::optional<HeldLink> link =
+        round >= 4 ? std::optional<HeldLink>() : link_of(index, dr);
     const bool gentle =
         -initial_normal_velocity(c) <= c.v_micro * (1.0 + settings().microcollision_speed_slack);
     ResolveOptions options;
     options.microcollisions = !link;
-    if (gentle && link) options.restitution = 0.0;
+    if ((gentle || round >= 2) && link) options.restitution = 0.0;
     CollisionRecord record = collide(p, c, t, options);
     if (std::getenv("PALPABLE_DEBUG_ISLAND")) {
       std::fprintf(stderr, "collide %s-%s t %.17g u %.3g link %d gentle %d piece %d %d\n",
@@ -497,6 +504,14 @@ struct Simulation::Impl {
       if (body(id).is_dynamic()) dynamic.push_back(id);
     }
     const std::uint32_t i = join(dynamic, t);
+    if (std::getenv("PALPABLE_DEBUG_ISLAND")) {
+      std::fprintf(
+          stderr,
+          "hold %s on %s: mover feature %zu support face %zu point_pair %d gap %.3g sphere %.3g\n",
+          body(link.mover).name.c_str(), body(link.support).name.c_str(),
+          link.mover_feature_M.size(), link.support_face_S.size(), link.point_pair ? 1 : 0,
+          link.gap, link.sphere_radius);
+    }
     islands[i].links.push_back(link);
     if (p.cache.piece_results().empty()) {
       p.held = true;
