@@ -132,6 +132,8 @@ void read_events_csv(const std::string& path, Trace& trace) {
     std::string field;
     while (std::getline(ss, field, ',')) fields.push_back(field);
     if (fields.size() < 7) throw InputError(where, "expected at least 7 columns");
+    // Only collisions touch: the rows of held contacts changing mode (hold, stick, ...) do not.
+    if (fields[1] != "collision" && fields[1] != "microcollision") continue;
     double v[4];
     for (int k = 0; k < 4; ++k) {
       const std::string& f = fields[k == 0 ? 0 : k + 3];

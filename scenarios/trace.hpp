@@ -42,8 +42,9 @@ void write_trace_rows(std::ostream& out, double t, const std::vector<std::string
 Trace read_trace_csv(const std::string& path);
 
 // Reads an events CSV (header starting "t,kind,body_a,body_b,px,py,pz", further columns ignored)
-// into trace.contacts, in file order; body names must be bodies of the trace. Throws InputError
-// naming the file and line for malformed input or an unknown body.
+// into trace.contacts, in file order: the collisions and microcollisions (a held contact's mode
+// changes are rows of other kinds, skipped); body names must be bodies of the trace. Throws
+// InputError naming the file and line for malformed input or an unknown body.
 void read_events_csv(const std::string& path, Trace& trace);
 
 }  // namespace palpable

@@ -116,6 +116,10 @@ std::optional<HeldLink> point_pair_link(std::uint32_t pair, BodyId a, BodyId b,
   const Mat3 R_M = rotation(mover.state), R_S = rotation(support.state);
   link.sphere_radius = centred_sphere_radius(mover.geometry);
   link.support_sphere_radius = centred_sphere_radius(support.geometry);
+  // Between two polyhedra such a contact (an edge across an edge, a vertex on an edge) is
+  // fleeting, and the rest of the two bodies would go unwatched while it is held: it stays a
+  // collision. A sphere has nothing else that could touch.
+  if (link.sphere_radius == 0.0 && link.support_sphere_radius == 0.0) return std::nullopt;
   if (link.sphere_radius == 0.0) {
     if (mf.empty() || mf.size() > 2) return std::nullopt;
     for (const Vec3& p : mf)
@@ -569,12 +573,13 @@ bool swap_roles(HeldLink& link, int edge, const BodyState& mover, const BodyStat
 namespace {
 
 // A plane link whose mover's vertex or edge slid off the support's face: the same contact, now
-// between that feature and the face's boundary edge nearest to it. False for a face, a sphere, or
-// an unbounded support (nothing to slide off).
+// between that feature and the face's boundary edge nearest to it. False for a face, a sphere, an
+// unbounded support (nothing to slide off), and between two polyhedra (see point_pair_link).
 bool to_point_pair(HeldLink& link, const BodyState& mover, const BodyState& support) {
   const std::size_t n = link.support_face_S.size();
-  if (link.point_pair || link.sphere_radius > 0.0 || n < 3 || link.mover_feature_M.empty() ||
-      link.mover_feature_M.size() > 2) {
+  // (Two polyhedra: see point_pair_link; only a sphere has a point contact that can be held.)
+  if (link.point_pair || link.sphere_radius > 0.0 || n < 3 || link.support_sphere_radius == 0.0 ||
+      link.mover_feature_M.empty() || link.mover_feature_M.size() > 2) {
     return false;
   }
   const Mat3 R_M = rotation(mover), R_S = rotation(support);
@@ -1190,6 +1195,16 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
   };
   set_reference(t, y);
   std::vector<EventValue> g_prev = events(t, y);
+  // Another vertex of a held body already below the held feature by half the gap: the contact
+  // is not where it is held (a body lying on many nearly level vertices, tipped onto one of
+  // them): it lands now, and its pair is held again at the vertex that is lowest.
+  for (const EventValue& g : g_prev) {
+    if (g.kind == IslandEvent::Kind::kLanding && g.value < -g.tolerance) {
+      t_end = t0;
+      event = IslandEvent{g.kind, g.link};
+      return;
+    }
+  }
   dopri5::Step step;
   std::vector<double> w_max(bodies.size(), 0.0), a_max(bodies.size(), 0.0);
   std::vector<Vec3> a_start(bodies.size(), Vec3::Zero());

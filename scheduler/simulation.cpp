@@ -419,6 +419,7 @@ struct Simulation::Impl {
     }
     if (persistent()) return collide_or_hold(index, c, DistanceResult(contact), t);
     CollisionRecord record = collide(p, c, t);
+    if (observer) observer->on_collision(record);
     refresh_after_collision(record, t);  // `p` may move when pairs are created there
     return record;
   }
@@ -447,12 +448,17 @@ struct Simulation::Impl {
     const int round = t == p.last_collision_t ? p.collisions_at_t : 0;
     const std::optional<HeldLink> link =
         round >= 4 ? std::optional<HeldLink>() : link_of(index, dr);
+    // The hand-over speed: the microcollision speed of the bodies' weight along the normal (a
+    // held body's acceleration may be zero, its weight is not).
+    const double v_hold =
+        std::max(c.v_micro, microcollision_speed(settings(), std::abs(world.gravity_W.dot(c.n_W))));
     const bool gentle =
-        -initial_normal_velocity(c) <= c.v_micro * (1.0 + settings().microcollision_speed_slack);
+        -initial_normal_velocity(c) <= v_hold * (1.0 + settings().microcollision_speed_slack);
     ResolveOptions options;
     options.microcollisions = !link;
     if ((gentle || round >= 2) && link) options.restitution = 0.0;
     CollisionRecord record = collide(p, c, t, options);
+    if (observer) observer->on_collision(record);
     if (std::getenv("PALPABLE_DEBUG_ISLAND")) {
       std::fprintf(stderr, "collide %s-%s t %.17g u %.3g link %d gentle %d piece %d %d\n",
                    body(a).name.c_str(), body(b).name.c_str(), t, record.approach_speed,
@@ -460,7 +466,7 @@ struct Simulation::Impl {
     }
     const Vec3 u_after =
         point_velocity_W(body(a).state, record.p_W) - point_velocity_W(body(b).state, record.p_W);
-    if (link && u_after.dot(record.n_W) < c.v_micro) {
+    if (link && u_after.dot(record.n_W) < v_hold) {
       hold(index, *link, dr, t);
     } else {
       after_collision(record, t);
@@ -694,7 +700,8 @@ struct Simulation::Impl {
     Island& is = islands[i];
     if (is.motion == Island::Motion::kRest && !is.links.empty()) {
       ++stats.rests;
-      report("rest", is.links.front().mover, is.links.front().support,
+      const HeldLink& link = is.links.front();
+      report("rest", std::min(link.mover, link.support), std::max(link.mover, link.support),
              body(is.bodies.front()).state.x_W, t);
     }
     if (!std::isfinite(is.t_end)) {
@@ -843,7 +850,6 @@ struct Simulation::Impl {
                            pairs.pair(e.owner).a == e.a && pairs.pair(e.owner).b == e.b,
                        "pair event without its pair");
         result.collision = check_pair(e.owner, e.t);
-        if (result.collision && observer) observer->on_collision(*result.collision);
         break;
       }
       case EventKind::kIsland:

@@ -67,6 +67,19 @@ class RunObserver : public SimulationObserver {
     put_number(out, r.energy_change);
     out << ',' << (r.centre_of_pressure ? 1 : 0) << '\n';
   }
+  // A held contact changing mode (persistent contact model): a row of its own kind, at the
+  // contact's reference point, with no impulse.
+  void on_mode_change(const ModeChange& m) override {
+    if (!events_) return;
+    std::ostream& out = events_->stream();
+    put_number(out, m.t);
+    out << ',' << m.kind << ',' << names_[m.a.index] << ',' << names_[m.b.index];
+    for (int i = 0; i < 3; ++i) {
+      out << ',';
+      put_number(out, m.p_W[i]);
+    }
+    out << ",0,0,0,0,0,0,0,0,0\n";
+  }
 
  private:
   std::vector<std::string> names_;
