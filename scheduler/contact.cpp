@@ -391,6 +391,17 @@ bool approaching(const Contact& c) {
   return c.u_n < -1e-12 * scale;
 }
 
+bool patch_approaching(const Contact& c, const BodyState& s1, const BodyState& s2) {
+  const double scale =
+      contact_point_velocity_W(c.body1).norm() + contact_point_velocity_W(c.body2).norm();
+  for (const Vec3& q : c.patch) {
+    if ((point_velocity_W(s1, q) - point_velocity_W(s2, q)).dot(c.n_W) < -1e-12 * scale) {
+      return true;
+    }
+  }
+  return false;
+}
+
 double initial_normal_velocity(const Contact& c) {
   return frame_problem(c.body1, c.body2, contact_frame_W(c.n_W)).u0_c.z();
 }

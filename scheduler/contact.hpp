@@ -132,6 +132,10 @@ Placement place_over_patch(Contact& c, const BodyState& s1, const BodyState& s2,
 // (a body left at rest in contact by an e = 0 collision must collide again, DESIGN.md §4).
 bool approaching(const Contact& c);
 
+// True if any point of the contact's patch approaches (a corner of a face landing while the
+// centre of pressure, where approaching() looks, does not).
+bool patch_approaching(const Contact& c, const BodyState& s1, const BodyState& s2);
+
 // Puts the contact at `point_W` (between the bodies, on the normal's line through it): each body's
 // contact offset is to where that line meets its own surface.
 void place(Contact& c, const Vec3& point_W);

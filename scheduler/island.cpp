@@ -519,6 +519,28 @@ std::vector<Vec3> contact_points_W(const HeldContact& c) {
   return {c.c_W};
 }
 
+// The point of a feature (a face's plane, an edge's line, a vertex) under q along n.
+Vec3 on_feature(const std::vector<Vec3>& feature, const Vec3& n, const Vec3& q) {
+  if (feature.size() >= 3) {
+    // The face's plane: through its first vertex, normal to two of its edges.
+    Vec3 normal = (feature[1] - feature[0]).cross(feature[2] - feature[0]);
+    for (std::size_t i = 3; normal.norm() == 0.0 && i < feature.size(); ++i) {
+      normal = (feature[1] - feature[0]).cross(feature[i] - feature[0]);
+    }
+    const double along = normal.dot(n);
+    if (along == 0.0) return q;
+    return q + n * (normal.dot(feature[0] - q) / along);
+  }
+  if (feature.size() == 2) {
+    // The edge's point whose projection on the plane is q's.
+    const Vec3 e = feature[1] - feature[0];
+    const Vec3 e_in = e - n * n.dot(e);
+    const double s = e_in.squaredNorm() > 0.0 ? e_in.dot(q - feature[0]) / e_in.squaredNorm() : 0.0;
+    return feature[0] + std::clamp(s, 0.0, 1.0) * e;
+  }
+  return feature.empty() ? q : feature[0];
+}
+
 // The edge of the support's face (world) that all `points` lie on, or -1.
 int support_edge_under(const HeldLink& link, const BodyState& support,
                        const std::vector<Vec3>& points) {
@@ -572,19 +594,16 @@ bool swap_roles(HeldLink& link, int edge, const BodyState& mover, const BodyStat
 
 namespace {
 
-// A plane link whose mover's vertex or edge slid off the support's face: the same contact, now
-// between that feature and the face's boundary edge nearest to it. False for a face, a sphere, an
-// unbounded support (nothing to slide off), and between two polyhedra (see point_pair_link).
+// A plane link whose sphere rolled or slid off the support's face: the same contact, now between
+// the sphere and the face's boundary edge nearest to it (a ball going over a table's edge). False
+// for any other mover (a polyhedron's vertex or edge on an edge is not held: see point_pair_link)
+// and for an unbounded support (nothing to leave).
 bool to_point_pair(HeldLink& link, const BodyState& mover, const BodyState& support) {
   const std::size_t n = link.support_face_S.size();
-  // (Two polyhedra: see point_pair_link; only a sphere has a point contact that can be held.)
-  if (link.point_pair || link.sphere_radius > 0.0 || n < 3 || link.support_sphere_radius == 0.0 ||
-      link.mover_feature_M.empty() || link.mover_feature_M.size() > 2) {
-    return false;
-  }
-  const Mat3 R_M = rotation(mover), R_S = rotation(support);
-  std::vector<Vec3> m;
-  for (const Vec3& q : link.mover_feature_M) m.push_back(mover.x_W + R_M * q);
+  // Only a sphere has a point contact that can be held (two polyhedra: see point_pair_link).
+  if (link.point_pair || link.sphere_radius == 0.0 || n < 3) return false;
+  const Mat3 R_S = rotation(support);
+  const std::vector<Vec3> m = {mover.x_W};
   double best = kInfinity;
   std::size_t edge = 0;
   for (std::size_t e = 0; e < n; ++e) {
@@ -700,7 +719,9 @@ Island::PlanResult Island::plan(World& world, const std::vector<const ShapeGeome
       const int edge = support_edge_under(link, ss, {c.c_W + cop.x() * c.t1_W + cop.y() * c.t2_W});
       event = IslandEvent{};
       if (edge >= 0) {
-        if (!swap_roles(link, edge, sm, ss)) remove_links({static_cast<int>(li)});
+        if (!swap_roles(link, edge, sm, ss) && !to_point_pair(link, sm, ss)) {
+          remove_links({static_cast<int>(li)});
+        }
         continue;
       }
       // Else it reached the boundary of the mover's own feature: the body tips about the edge
@@ -756,9 +777,15 @@ Island::PlanResult Island::plan(World& world, const std::vector<const ShapeGeome
         if (!swap_roles(link, edge, sm, ss)) drop.push_back(static_cast<int>(i));
         again = true;
       } else if (link.sphere_radius == 0.0) {
-        link.mover_feature_M.clear();
+        // The reduced patch's points lie at the patch's mean height; the feature kept is the
+        // mover's own surface under them (a tilted edge's real end, not a point beside it).
         const Mat3 R = rotation(sm);
-        for (const Vec3& q : points) link.mover_feature_M.push_back(R.transpose() * (q - sm.x_W));
+        std::vector<Vec3> feature;
+        for (const Vec3& q : link.mover_feature_M) feature.push_back(sm.x_W + R * q);
+        std::vector<Vec3> kept;
+        for (const Vec3& q : points)
+          kept.push_back(R.transpose() * (on_feature(feature, c.n_W, q) - sm.x_W));
+        link.mover_feature_M = kept;
       }
     }
     if (!drop.empty()) remove_links(drop);
@@ -1069,6 +1096,7 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
     Vec3 slip = Vec3::Zero(), dw = Vec3::Zero();
   };
   std::vector<Reference> reference;
+  std::vector<double> landing_threshold;  // per link [m] (see below)
   // A fixed block of event functions per link (their kinds follow the link's modes, which do not
   // change within a motion), so that the values at two states line up entry by entry.
   auto events = [&](double t, const dopri5::State& y) {
@@ -1163,21 +1191,43 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
       const BodyState& sm = states[static_cast<std::size_t>(km)];
       const Mat3 R = rotation(sm) * piece.R_M;
       const Vec3 origin = sm.x_W + rotation(sm) * piece.p_M;
-      // Its height against the held feature's: it lands when it comes halfway down from the
-      // feature's height to the plane (a vertex level with the feature now, as when the body
-      // has just tipped onto an edge or a corner of a face, must go down to land).
-      double lowest = kInfinity;
+      // Heights above the support's plane: another vertex lands when it comes down to half the
+      // held feature's height (a vertex lower than the feature but rising, the other end of an
+      // edge the body tips up from, has not landed; one at the feature's height must go down).
+      const int ks = index_of(link.support);
+      const BodyState ss =
+          ks >= 0
+              ? states[static_cast<std::size_t>(ks)]
+              : (t > world.bodies[link.support.index].state.t
+                     ? advance(world.bodies[link.support.index],
+                               world.bodies[link.support.index].state, t, world.gravity_W, settings)
+                     : world.bodies[link.support.index].state);
+      const Vec3 plane = ss.x_W + rotation(ss) * link.point_S;
+      double lowest = kInfinity, feature_lowest = kInfinity;
       const double tol = 1e-9 * size;
+      const Mat3 R_body = rotation(sm);
+      for (const Vec3& f : link.mover_feature_M) {
+        feature_lowest = std::min(feature_lowest, c.n_W.dot(sm.x_W + R_body * f - plane));
+      }
       for (int v = 0; v < piece.mesh->num_vertices(); ++v) {
         const Vec3 q_M = piece.p_M + piece.R_M * piece.mesh->vertex(v);
         bool held_vertex = false;
-        for (const Vec3& f : link.mover_feature_M)
+        for (const Vec3& f : link.mover_feature_M) {
           held_vertex = held_vertex || (f - q_M).norm() <= tol;
+        }
         if (held_vertex) continue;
         const Vec3 q = origin + R * piece.mesh->vertex(v);
-        lowest = std::min(lowest, c.n_W.dot(q - c.c_W));
+        lowest = std::min(lowest, c.n_W.dot(q - plane));
       }
-      e[8].value = lowest + 0.5 * link.gap;
+      // The threshold is set at the motion's start: half the feature's height (at least a
+      // quarter envelope, so that a body held at a gap of zero does not land into the plane), or
+      // half the vertex's own height if it starts lower (rising now, it must not sink unseen).
+      if (landing_threshold.size() <= i) landing_threshold.resize(i + 1, -kInfinity);
+      if (landing_threshold[i] == -kInfinity) {
+        const double feature_level = std::max(feature_lowest, 0.5 * settings.envelope_m);
+        landing_threshold[i] = 0.5 * std::max(0.0, std::min(feature_level, lowest));
+      }
+      e[8].value = lowest - landing_threshold[i];
     }
     return out;
   };
@@ -1195,11 +1245,16 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
   };
   set_reference(t, y);
   std::vector<EventValue> g_prev = events(t, y);
-  // Another vertex of a held body already below the held feature by half the gap: the contact
-  // is not where it is held (a body lying on many nearly level vertices, tipped onto one of
-  // them): it lands now, and its pair is held again at the vertex that is lowest.
-  for (const EventValue& g : g_prev) {
-    if (g.kind == IslandEvent::Kind::kLanding && g.value < -g.tolerance) {
+  // Another vertex of a held body touching the plane already (its threshold is 0) and going
+  // down: the contact is not where it is held (a body lying on many nearly level vertices,
+  // tipped onto one of them): it lands now, and its pair is held again at the vertex that is
+  // lowest.
+  const dopri5::State y_soon = y + 1e-9 * k0;
+  const std::vector<EventValue> g_soon = events(t + 1e-9, y_soon);
+  for (std::size_t j = 0; j < g_prev.size() && j < g_soon.size(); ++j) {
+    const EventValue& g = g_prev[j];
+    if (g.kind == IslandEvent::Kind::kLanding && g.value <= g.tolerance &&
+        g_soon[j].value < g.value) {
       t_end = t0;
       event = IslandEvent{g.kind, g.link};
       return;

@@ -54,6 +54,9 @@ class PairSet {
     PairCache cache;
     bool live = false;
     bool held = false;  // its contact is held (scheduler/island.hpp): no pair events
+    // Its held contact let go at last_collision_t (lift-off, separation): at that instant it is
+    // not a collision unless it truly approaches (gravity pressing it is what just failed).
+    bool lifted = false;
   };
 
   // One geometry per distinct shape (shapes are shared between bodies). Throws InputError

@@ -200,6 +200,15 @@ struct Simulation::Impl {
     return *best;
   }
 
+  // A pair whose held contact let go at this very instant, not truly approaching (its contact
+  // is only pressed by the gravity that no longer holds it: a ball leaving a table's edge).
+  static bool lifting(const PairSet::Pair& p, const Contact& c, double t) {
+    if (!(p.lifted && p.last_collision_t == t)) return false;
+    const double scale =
+        contact_point_velocity_W(c.body1).norm() + contact_point_velocity_W(c.body2).norm();
+    return !(c.u_n < -1e-12 * scale);
+  }
+
   // How a body moves over the coming interval, for a bound: free flight, or its island's motion.
   ToiMotion motion_for(BodyId id, const BodyState& s, const BodyState& other,
                        BodyId other_id) const {
@@ -254,7 +263,7 @@ struct Simulation::Impl {
           contact.distance <= settings().envelope_m) {
         const Contact c = make_contact(side(p.a, s1), side(p.b, s2), contact, settings(),
                                        world.gravity_W, /*with_patch=*/false);
-        if (approaching(c)) return t;
+        if (approaching(c) && !lifting(p, c, t)) return t;
         if (contact.status == ContactStatus::kPenetrating) return t + floor;
         resting = c.g_n == 0.0;
       }
@@ -400,7 +409,10 @@ struct Simulation::Impl {
     }
     Contact c = make_contact(side(p.a, s1), side(p.b, s2), contact, settings(), world.gravity_W,
                              /*with_patch=*/true);
-    if (!approaching(c)) {
+    // Under the persistent model a face whose corner lands is a collision even while its centre
+    // of pressure does not approach (the hold, not a microcollision train, must catch it).
+    const bool lands = approaching(c) || (persistent() && patch_approaching(c, s1, s2));
+    if (!lands || lifting(p, c, t)) {
       schedule_pair(index, next_check_time(p, s1, s2, dr, t, &c));
       return std::nullopt;
     }
@@ -605,6 +617,9 @@ struct Simulation::Impl {
       for (std::uint32_t pair : r.released) {
         PairSet::Pair& q = pairs.pair(pair);
         q.held = false;
+        q.lifted = true;
+        q.last_collision_t = t;
+        q.collisions_at_t = 0;
         report("release", q.a, q.b, body(q.a).state.x_W, t);
       }
       bool changed = false;
