@@ -57,12 +57,13 @@ void ShapeGeometry::add_piece(const Shape& shape, const Vec3& p_M, const Mat3& R
 namespace {
 
 // Status and distance from a signed distance d (negative: overlap by -d): penetration is never
-// reported as a distance.
-void set_signed_distance(DistanceResult& r, double d) {
+// reported as a distance. An overlap within the rounding of coordinates of size `scale` (a few
+// ulp) is touching: two bodies resting on each other at a gap of zero are not overlapping.
+void set_signed_distance(DistanceResult& r, double d, double scale) {
   if (d > 0.0) {
     r.status = ContactStatus::kSeparated;
     r.distance = d;
-  } else if (d == 0.0) {
+  } else if (d >= -1e-14 * scale) {
     r.status = ContactStatus::kTouching;
     r.distance = 0.0;
   } else {
@@ -127,7 +128,7 @@ void halfspace_vs_convex(const PosedPiece& half, const PosedPiece& other, Featur
   }
   const double d = n_W.dot(deepest_W) - offset_W;
   r.n_W = n_W;
-  set_signed_distance(r, d);
+  set_signed_distance(r, d, std::max({1.0, deepest_W.cwiseAbs().maxCoeff(), std::abs(offset_W)}));
   r.p1_W = deepest_W;
   r.p2_W = deepest_W - d * n_W;
 }
@@ -191,7 +192,8 @@ DistanceResult piece_pair(const PosedPiece& a, const PosedPiece& b, FeaturePair&
     return r;
   }
   // With a sphere, a core distance of zero means the centre is on the other surface: overlap.
-  set_signed_distance(r, d);
+  set_signed_distance(
+      r, d, std::max({1.0, core1_W.cwiseAbs().maxCoeff(), core2_W.cwiseAbs().maxCoeff()}));
   return r;
 }
 

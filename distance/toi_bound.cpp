@@ -67,7 +67,12 @@ ToiBound toi_bound(const ToiMotion& motion1, const ToiMotion& motion2,
     // d_target < envelope). Either way each step still progresses by at least d_target / b.
     // Uncapped, a box landing at 2.4 m/s went 2.8e-6 m deep at envelope 1e-9, and a box at
     // 1e4 m/s 4.2 mm deep at envelope 1e-4 (tests/tools/extremes_test.cpp).
-    const double cap = solve_gap_closing(a, b, std::max(closest.distance, d_target));
+    // (Under the persistent contact model no overlap at all: what rests is held, so a pair
+    // inside the target gap is one that has just let go or is about to land.)
+    const double allowed = settings.contact_model == ContactModel::kPersistent
+                               ? closest.distance
+                               : std::max(closest.distance, d_target);
+    const double cap = solve_gap_closing(a, b, allowed);
     const double floor = std::min(settings.toi_min_progress_s, cap);
     if (bound.dt < floor) {
       bound.dt = floor;

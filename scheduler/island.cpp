@@ -657,6 +657,10 @@ Island::PlanResult Island::plan(World& world, const std::vector<const ShapeGeome
   HeldModes modes;
   Problem p;
   std::vector<HeldContact> before;  // the contacts before the modes are chosen
+  // What made this plan: the event the motion reached (the loop sets it), or nothing (a
+  // collision, a hold): a stale planned event must not count.
+  IslandEvent cause = trigger;
+  trigger = IslandEvent{};
   for (int attempt = 0;; ++attempt) {
     bool forced = false;
     p = build_problem(*this, world, anchor_, t);
@@ -675,14 +679,15 @@ Island::PlanResult Island::plan(World& world, const std::vector<const ShapeGeome
         }
       }
       remove_links(drop);
+      cause = IslandEvent{};  // (its link's index may have moved)
       continue;
     }
     if (links.empty()) return result;
-    if (event.link >= 0 && event.link < static_cast<int>(p.contacts.size())) {
-      HeldContact& c = p.contacts[static_cast<std::size_t>(event.link)];
-      c.slip_stopped = event.kind == IslandEvent::Kind::kSlipStop;
-      c.spin_stopped = event.kind == IslandEvent::Kind::kSpinStop;
-      c.roll_stopped = event.kind == IslandEvent::Kind::kRollStop;
+    if (cause.link >= 0 && cause.link < static_cast<int>(p.contacts.size())) {
+      HeldContact& c = p.contacts[static_cast<std::size_t>(cause.link)];
+      c.slip_stopped = cause.kind == IslandEvent::Kind::kSlipStop;
+      c.spin_stopped = cause.kind == IslandEvent::Kind::kSpinStop;
+      c.roll_stopped = cause.kind == IslandEvent::Kind::kRollStop;
     }
     std::vector<int> separating;
     // What separates faster than a microcollision would rebound lets go; slower is held (the
@@ -700,24 +705,24 @@ Island::PlanResult Island::plan(World& world, const std::vector<const ShapeGeome
     if (!separating.empty()) {
       // Contacts that an impact sent apart let go; the rest are planned again without them.
       remove_links(separating);
-      event = IslandEvent{};
+      cause = IslandEvent{};
       continue;
     }
-    if (event.kind == IslandEvent::Kind::kTip && event.link >= 0 &&
-        event.link < static_cast<int>(links.size())) {
+    if (cause.kind == IslandEvent::Kind::kTip && cause.link >= 0 &&
+        cause.link < static_cast<int>(links.size())) {
       // The centre of pressure reached the edge of the support's face: the mover slides off it
       // and tips over that edge.
-      HeldLink& link = links[static_cast<std::size_t>(event.link)];
+      HeldLink& link = links[static_cast<std::size_t>(cause.link)];
       const int k_m = index_of(link.mover), k_s = index_of(link.support);
       const BodyState sm =
           k_m >= 0 ? anchor_[static_cast<std::size_t>(k_m)] : world.bodies[link.mover.index].state;
       const BodyState ss = k_s >= 0 ? anchor_[static_cast<std::size_t>(k_s)]
                                     : world.bodies[link.support.index].state;
-      const std::size_t li = static_cast<std::size_t>(event.link);
+      const std::size_t li = static_cast<std::size_t>(cause.link);
       const HeldContact& c = p.contacts[li];
       const Vec2 cop = solve_held(p.bodies, p.contacts).forces[li].centre_of_pressure;
       const int edge = support_edge_under(link, ss, {c.c_W + cop.x() * c.t1_W + cop.y() * c.t2_W});
-      event = IslandEvent{};
+      cause = IslandEvent{};
       if (edge >= 0) {
         if (!swap_roles(link, edge, sm, ss) && !to_point_pair(link, sm, ss)) {
           remove_links({static_cast<int>(li)});
@@ -1219,13 +1224,18 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
         const Vec3 q = origin + R * piece.mesh->vertex(v);
         lowest = std::min(lowest, c.n_W.dot(q - plane));
       }
-      // The threshold is set at the motion's start: half the feature's height (at least a
-      // quarter envelope, so that a body held at a gap of zero does not land into the plane), or
-      // half the vertex's own height if it starts lower (rising now, it must not sink unseen).
+      // The threshold is set at each step's start: half the feature's height (at least a
+      // quarter envelope), or half the lowest other vertex's height if that is lower: a vertex
+      // that halves its height within a step lands, whatever it did before (a body rocking on
+      // an edge with the rest of its face just above the plane must not sink into it).
       if (landing_threshold.size() <= i) landing_threshold.resize(i + 1, -kInfinity);
       if (landing_threshold[i] == -kInfinity) {
+        // A vertex on the plane already (to a billionth of the body's size: a face held at a gap
+        // of zero, its body tipped onto one of its edges) lands as soon as it goes down at all.
         const double feature_level = std::max(feature_lowest, 0.5 * settings.envelope_m);
-        landing_threshold[i] = 0.5 * std::max(0.0, std::min(feature_level, lowest));
+        landing_threshold[i] = lowest <= 1e-9 * size
+                                   ? lowest - 1e-12 * size
+                                   : 0.5 * std::max(0.0, std::min(feature_level, lowest));
       }
       e[8].value = lowest - landing_threshold[i];
     }
@@ -1338,6 +1348,7 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
     y = step.y1;
     k0 = step.k[6];
     set_reference(t, y);
+    landing_threshold.clear();
     g_prev = events(t, y);
     h = dopri5::next_step_size(h, step.error);
   }

@@ -119,6 +119,9 @@ class Island {
   double t_end = kInfinity;  // the next event's time
   IslandEvent event;
   double last_event_t = -kInfinity;  // when its last event was (no progress: counted)
+  // The event that makes the next plan (set by the loop when the motion reaches `event`; plan()
+  // reads and clears it). A plan after a collision or a hold has none.
+  IslandEvent trigger;
   int stalls = 0;
 
   // What plan() found.

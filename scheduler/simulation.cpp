@@ -137,9 +137,10 @@ struct Simulation::Impl {
     if (dr.status == ContactStatus::kPenetrating) ++stats.penetrations;
     if (dr.status == ContactStatus::kPenetrating && std::getenv("PALPABLE_DEBUG_ISLAND") &&
         stats.penetrations % 100000 == 1) {
-      std::fprintf(stderr, "penetrating %s-%s t %.17g pieces %d %d islands %d %d held %d\n",
-                   body(p.a).name.c_str(), body(p.b).name.c_str(), now, dr.piece1, dr.piece2,
-                   island_of[p.a.index], island_of[p.b.index], p.held ? 1 : 0);
+      std::fprintf(
+          stderr, "penetrating %s-%s t %.17g depth %.3g pieces %d %d islands %d %d held %d\n",
+          body(p.a).name.c_str(), body(p.b).name.c_str(), now, dr.penetration_depth, dr.piece1,
+          dr.piece2, island_of[p.a.index], island_of[p.b.index], p.held ? 1 : 0);
     }
     // DESIGN.md §5 step 6: no penetration deeper than the envelope (a polyhedron pair's depth is
     // unknown here: any overlap of one fails).
@@ -743,6 +744,7 @@ struct Simulation::Impl {
     for (BodyId id : is.bodies) commit(id, t);
     ++stats.mode_changes;
     const IslandEvent ev = is.event;
+    is.trigger = ev;
     if (ev.link >= 0 && ev.link < static_cast<int>(is.links.size())) {
       const HeldLink& link = is.links[static_cast<std::size_t>(ev.link)];
       if (ev.kind != IslandEvent::Kind::kSegmentEnd) {

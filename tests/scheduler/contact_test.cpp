@@ -214,8 +214,8 @@ TEST_CASE("contact: the energy a collision may create is the integration's and t
     CAPTURE(e);
     const Contact c = make_contact(posed.side1(), posed.side2(), posed.closest, posed.settings,
                                    Vec3::Zero(), /*with_patch=*/true);
-    const Resolution r = resolve(c, posed.side1(), posed.side2(), Material{0.0, e},
-                                 posed.settings, {}, 0.0);
+    const Resolution r =
+        resolve(c, posed.side1(), posed.side2(), Material{0.0, e}, posed.settings, {}, 0.0);
     CHECK(r.energy_allowance < 1e-9);
     CHECK(r.record.energy_change <= r.energy_allowance);
     // Frictionless through the centre of mass: (1/2) m v_n^2 (e^2 - 1) exactly.

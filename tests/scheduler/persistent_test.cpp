@@ -1,0 +1,298 @@
+// Persistent contact (DESIGN.md §8.1, scheduler/island.hpp) in whole runs against closed forms:
+// the instants at which contact changes mode must be where the closed form puts them, resting
+// bodies must not move at all and cost nothing, and the families of the shipped scenes (other
+// angles, frictions, shapes and starts) must hold too.
+#include "scheduler/simulation.hpp"
+
+#include "core/ballistic.hpp"
+#include "tests/support/test_world.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+using namespace palpable;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kG = 9.81;
+
+Settings persistent() {
+  Settings s;
+  s.contact_model = ContactModel::kPersistent;
+  return s;
+}
+
+// Counts what a run reports, and keeps the mode changes.
+struct Modes : test::Recorder {
+  std::vector<ModeChange> changes;
+  void on_mode_change(const ModeChange& m) override { changes.push_back(m); }
+  const ModeChange* first(const std::string& kind) const {
+    for (const ModeChange& m : changes) {
+      if (kind == m.kind) return &m;
+    }
+    return nullptr;
+  }
+};
+
+// A fixed ramp (a box whose top face passes through the origin) at `angle` about y, and a block
+// of the given shape resting on it at distance `along` down the slope, `gap` above the face,
+// launched down the slope at v0 (plus `across` across it).
+struct Ramp {
+  double angle;
+  Vec3 n, down, across;
+  World world;
+  Ramp(double angle_rad, double mu, const Shape& block, double half_height, double along, double v0,
+       double v_across = 0.0, double gap = 0.0)
+      : angle(angle_rad) {
+    n = Vec3(std::sin(angle), 0, std::cos(angle));
+    down = Vec3(std::cos(angle), 0, -std::sin(angle));
+    across = n.cross(down);
+    const Quat q = test::about(Vec3::UnitY(), angle);
+    world.settings = persistent();
+    world.default_material = Material{mu, 0.0};
+    world.add(test::fixed_body("ramp", ConvexPolyhedron::box(Vec3(5, 1, 0.1)), -0.1 * n, q));
+    world.add(test::dynamic_body("block", block, 1.0, along * down + (half_height + gap) * n, q,
+                                 v0 * down + v_across * across));
+  }
+};
+
+}  // namespace
+
+TEST_CASE("persistent: a block launched down a ramp stops at t* exactly and then never moves",
+          "[scheduler][persistent]") {
+  // 30 degrees, mu 0.7, 2 m/s: t* = v0 / (g (mu cos - sin)) (DESIGN.md §6), and other angles,
+  // frictions and block shapes of the same family.
+  struct Case {
+    double angle_deg, mu, v0;
+    bool hull;
+  };
+  for (const Case& k : {Case{30, 0.7, 2.0, false}, Case{20, 0.5, 1.0, false},
+                        Case{10, 0.25, 0.5, false}, Case{25, 0.6, 1.5, true}}) {
+    CAPTURE(k.angle_deg, k.mu, k.v0, k.hull);
+    const double a = k.angle_deg * kPi / 180.0;
+    const Shape block =
+        k.hull ? ConvexPolyhedron::prism(0.12, 0.1, 7) : ConvexPolyhedron::box(Vec3(0.1, 0.1, 0.1));
+    Ramp ramp(a, k.mu, block, 0.1, -2.0, k.v0);
+    const double decel = kG * (k.mu * std::cos(a) - std::sin(a));
+    const double t_star = k.v0 / decel;
+    Simulation sim(ramp.world, SimulationOptions{0.01});
+    Modes rec;
+    sim.run_until(t_star + 2.0, &rec);
+    const ModeChange* stick = rec.first("stick");
+    REQUIRE(stick);
+    CHECK(stick->t == Approx(t_star).margin(1e-9));
+    REQUIRE(rec.first("rest"));
+    CHECK(rec.first("rest")->t == stick->t);
+    // The sliding samples on the closed form; afterwards exactly where it stopped.
+    const Vec3 x0 = ramp.world.bodies[1].state.x_W;
+    const Vec3 x_stop = x0 + ramp.down * (k.v0 * t_star - 0.5 * decel * t_star * t_star);
+    for (std::size_t i = 0; i < rec.times.size(); ++i) {
+      const double t = rec.times[i];
+      const Vec3& x = rec.samples[i][1].x_W;
+      const double s = t < t_star ? k.v0 * t - 0.5 * decel * t * t
+                                  : k.v0 * t_star - 0.5 * decel * t_star * t_star;
+      CHECK((x - (x0 + s * ramp.down)).norm() < 1e-12);
+      if (t > t_star) CHECK(x == rec.samples.back()[1].x_W);
+    }
+    CHECK((rec.samples.back()[1].x_W - x_stop).norm() < 1e-12);
+    CHECK(rec.samples.back()[1].v_W.norm() == 0.0);
+    // Nothing but samples after the stop.
+    CHECK(sim.stats().events - sim.stats().samples <= 12);
+  }
+}
+
+TEST_CASE("persistent: a block sliding down a ramp accelerates at g (sin - mu cos), straight",
+          "[scheduler][persistent]") {
+  for (double mu : {0.0, 0.3, 0.5}) {
+    CAPTURE(mu);
+    const double a = kPi / 6;
+    Ramp ramp(a, mu, ConvexPolyhedron::box(Vec3(0.1, 0.1, 0.1)), 0.1, -2.0, 0.0);
+    Simulation sim(ramp.world, SimulationOptions{0.01});
+    test::Recorder rec;
+    sim.run_until(1.0, &rec);
+    const double acc = kG * (std::sin(a) - mu * std::cos(a));
+    const Vec3 x0 = ramp.world.bodies[1].state.x_W;
+    for (std::size_t i = 0; i < rec.times.size(); ++i) {
+      const double t = rec.times[i];
+      const Vec3 d = rec.samples[i][1].x_W - x0;
+      CHECK(d.dot(ramp.down) == Approx(0.5 * acc * t * t).epsilon(1e-12).margin(1e-15));
+      // (Rounding of coordinates of 2 m: a few 1e-16 each.)
+      CHECK(std::abs(d.dot(ramp.across)) < 1e-14);
+      CHECK(std::abs(d.dot(ramp.n)) < 1e-14);
+    }
+  }
+}
+
+TEST_CASE("persistent: a block that can stay on a 20 degree ramp does not move, at no cost",
+          "[scheduler][persistent]") {
+  for (double gap : {0.0, 3e-5}) {
+    CAPTURE(gap);
+    Ramp ramp(20.0 * kPi / 180.0, 0.5, ConvexPolyhedron::box(Vec3(0.1, 0.1, 0.1)), 0.1, -1.0, 0.0,
+              0.0, gap);
+    Simulation sim(ramp.world, SimulationOptions{0.01});
+    Modes rec;
+    sim.run_until(10.0, &rec);
+    for (const auto& sample : rec.samples) CHECK(sample[1].x_W == ramp.world.bodies[1].state.x_W);
+    CHECK(sim.stats().events - sim.stats().samples <= 10);
+    REQUIRE(rec.first("rest"));
+    CHECK(rec.first("rest")->t == 0.0);
+  }
+}
+
+TEST_CASE("persistent: a block launched across a ramp curves down and stops where it must",
+          "[scheduler][persistent]") {
+  // Launched across the slope, the slip turns as gravity pulls it down: no closed form, the
+  // motion is integrated. The friction force stays opposite the slip, so the speed along the
+  // slip falls at mu g cos theta - g sin theta ŝ.d; a block with mu > tan theta stops, and then
+  // stays.
+  const double a = 20.0 * kPi / 180.0;
+  Ramp ramp(a, 0.6, ConvexPolyhedron::box(Vec3(0.1, 0.1, 0.1)), 0.1, -1.0, 0.3, 1.0);
+  Simulation sim(ramp.world, SimulationOptions{0.01});
+  Modes rec;
+  sim.run_until(2.0, &rec);
+  REQUIRE(rec.first("stick"));
+  const double t_stop = rec.first("stick")->t;
+  CHECK(t_stop > 0.1);
+  CHECK(t_stop < 1.0);
+  // Friction only dissipates: the block's mechanical energy never rises; after the stop nothing
+  // moves.
+  double previous = 1e300;
+  for (std::size_t i = 0; i < rec.times.size(); ++i) {
+    const BodyState& s = rec.samples[i][1];
+    const double e = kinetic_energy(ramp.world.bodies[1], s) + kG * s.x_W.z();  // m = 1 kg
+    CHECK(e <= previous + 1e-9);
+    previous = e;
+    if (rec.times[i] > t_stop) CHECK(s.v_W.norm() == 0.0);
+  }
+  // It stays flat on the ramp: no rocking, no sinking.
+  const BodyState& end = rec.samples.back()[1];
+  CHECK((end.q_WM * Vec3::UnitZ() - ramp.n).norm() < 1e-9);
+}
+
+TEST_CASE("persistent: a sphere slides, then rolls at the closed-form instant and speed",
+          "[scheduler][persistent]") {
+  // Solid sphere, k = 2/5, launched without spin or with backspin: it rolls from
+  // t = k s0 / ((1 + k) mu g) at (v0 + k R w0) / (1 + k) (DESIGN.md §6).
+  const double R = 0.05, mu = 0.2, v0 = 2.0;
+  for (double backspin : {0.0, 20.0}) {
+    CAPTURE(backspin);
+    World world;
+    world.settings = persistent();
+    world.default_material = Material{mu, 0.0};
+    world.add(test::fixed_ground("table"));
+    // Backspin: w about -y for a ball moving along +x (rolling forward is w = +v/R about +y).
+    world.add(
+        test::sphere_body("ball", R, 0.1, Vec3(0, 0, R), Vec3(v0, 0, 0), Vec3(0, -backspin, 0)));
+    Simulation sim(world, SimulationOptions{0.01});
+    Modes rec;
+    sim.run_until(1.5, &rec);
+    const double k = 0.4;
+    const double s0 = v0 + backspin * R;  // slip speed of the contact point
+    const double t_roll = k * s0 / ((1 + k) * mu * kG);
+    const double v_final = (v0 - k * R * backspin) / (1 + k);
+    REQUIRE(rec.first("stick"));
+    CHECK(rec.first("stick")->t == Approx(t_roll).margin(1e-9));
+    const BodyState end = sim.state_at(BodyId{1}, 1.5);
+    CHECK(end.v_W.x() == Approx(v_final).margin(1e-12));
+    CHECK(std::abs(end.v_W.y()) < 1e-15);
+    CHECK(end.w_W.y() * R == Approx(v_final).margin(1e-12));
+    CHECK(end.x_W.z() == R);
+  }
+}
+
+TEST_CASE("persistent: a ball rolling on a turntable stays on the closed-form circle",
+          "[scheduler][persistent]") {
+  // Rolling on a plane spinning at Omega: the centre circles at 2 Omega / 7 on a circle of
+  // radius |v0| / (2 Omega / 7) (DESIGN.md §6), for 40 s.
+  const double Omega = 2 * kPi, R = 0.05;
+  World world;
+  world.settings = persistent();
+  world.default_material = Material{0.5, 0.0};
+  Body platter = test::fixed_body("platter", make_halfspace(Vec3::UnitZ(), 0.0));
+  platter.motion = MotionKind::kKinematic;
+  platter.kinematic.angular_velocity_W = Vec3(0, 0, Omega);
+  world.add(platter);
+  const Vec3 x0(0.3, 0, R), v0(0, 0.1, 0);
+  // Rolling: v + w x (-R z) = Omega z x x0.
+  const Vec3 u = Vec3(0, 0, Omega).cross(Vec3(0.3, 0, 0)) - v0;
+  // R (z x w) = u: w = -z x u / R (no spin about z).
+  world.add(test::sphere_body("ball", R, 0.1, x0, v0, -Vec3::UnitZ().cross(u) / R));
+  Simulation sim(world, SimulationOptions{0.01});
+  test::Recorder rec;
+  sim.run_until(40.0, &rec);
+  const double rate = 2.0 * Omega / 7.0;
+  const double radius = v0.norm() / rate;
+  const Vec3 centre = x0 + Vec3::UnitZ().cross(v0) / rate;
+  double worst = 0.0;
+  for (std::size_t i = 0; i < rec.times.size(); ++i) {
+    const double t = rec.times[i];
+    const Vec3 x = rec.samples[i][1].x_W;
+    worst = std::max(worst, std::abs((x - centre).head<2>().norm() - radius));
+    const Vec3 expected = centre + Eigen::AngleAxisd(rate * t, Vec3::UnitZ()) * (x0 - centre);
+    CHECK((x - expected).norm() < 1e-9);
+  }
+  CHECK(worst < 1e-9);
+  CHECK(sim.stats().events - sim.stats().samples < 200);  // horizon refreshes only
+}
+
+TEST_CASE("persistent: a ball rolling off a table's edge leaves it at the edge, on a parabola",
+          "[scheduler][persistent]") {
+  // A ball rolling at 1 m/s (v^2 > g R: it cannot follow the edge) on a fixed table whose top
+  // face ends at x = 1: it lifts off the instant its contact point reaches the edge, then flies
+  // x = 1 + v t', z = R + h - g t'^2 / 2 exactly.
+  const double R = 0.05, v = 1.0, top = 0.75;
+  World world;
+  world.settings = persistent();
+  world.default_material = Material{0.3, 0.0};
+  world.add(
+      test::fixed_body("table", ConvexPolyhedron::box(Vec3(1, 1, top / 2)), Vec3(0, 0, top / 2)));
+  world.add(test::fixed_ground("floor"));
+  world.add(
+      test::sphere_body("ball", R, 0.1, Vec3(0.2, 0, top + R), Vec3(v, 0, 0), Vec3(0, v / R, 0)));
+  Simulation sim(world, SimulationOptions{0.001});
+  Modes rec;
+  sim.run_until(1.2, &rec);
+  const double t_edge = (1.0 - 0.2) / v;
+  // The first mode change of the ball's hold on the table after its hold: at the edge.
+  const ModeChange* tip = rec.first("tip");
+  REQUIRE(tip);
+  CHECK(tip->t == Approx(t_edge).margin(1e-12));
+  const double t_floor = t_edge + std::sqrt(2.0 * top / kG);  // the centre falls `top`
+  for (std::size_t i = 0; i < rec.times.size(); ++i) {
+    const double t = rec.times[i];
+    if (t <= t_edge + 1e-3 || t >= t_floor - 1e-3) continue;
+    const double s = t - t_edge;
+    const Vec3& x = rec.samples[i][2].x_W;
+    CHECK(x.x() == Approx(1.0 + v * s).margin(1e-12));
+    CHECK(x.z() == Approx(top + R - 0.5 * kG * s * s).margin(1e-12));
+  }
+}
+
+TEST_CASE("persistent: a box on a sliding block stops with it at the closed-form time",
+          "[scheduler][persistent]") {
+  // A 0.5 kg box on a 1 kg block (mu 1 between them), launched at 1 m/s on a floor with
+  // mu 0.3: friction between them is enough (0.3 g x 0.5 kg < 1 x its weight), so both
+  // decelerate at 0.3 g and stop at 1 / (0.3 g).
+  World world;
+  world.settings = persistent();
+  world.default_material = Material{0.3, 0.0};
+  world.add(test::fixed_ground("floor"));
+  world.add(test::box_body("block", Vec3(0.2, 0.2, 0.1), 1.0, Vec3(0, 0, 0.1), Quat::Identity(),
+                           Vec3(1, 0, 0)));
+  world.add(test::box_body("box", Vec3(0.1, 0.1, 0.1), 0.5, Vec3(0, 0, 0.3 + 1e-6),
+                           Quat::Identity(), Vec3(1, 0, 0)));
+  world.pair_materials.push_back(PairMaterial{BodyId{1}, BodyId{2}, Material{1.0, 0.0}});
+  Simulation sim(world, SimulationOptions{0.01});
+  Modes rec;
+  sim.run_until(1.0, &rec);
+  const double t_stop = 1.0 / (0.3 * kG);
+  REQUIRE(rec.first("stick"));
+  CHECK(rec.first("stick")->t == Approx(t_stop).margin(1e-6));
+  for (int b : {1, 2}) {
+    const BodyState end = sim.state_at(BodyId{static_cast<std::uint32_t>(b)}, 1.0);
+    CHECK(end.v_W.norm() == 0.0);
+    CHECK(end.x_W.x() == Approx(0.5 / (0.3 * kG)).margin(1e-9));
+  }
+}
