@@ -7,7 +7,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <cstdlib>
 
 namespace palpable {
@@ -664,9 +663,6 @@ Island::PlanResult Island::plan(World& world, const std::vector<const ShapeGeome
   for (int attempt = 0;; ++attempt) {
     bool forced = false;
     p = build_problem(*this, world, anchor_, t);
-    if (std::getenv("PALPABLE_DEBUG_ISLAND")) {
-      for (int lost : p.lost) std::fprintf(stderr, "  link %d lost its patch\n", lost);
-    }
     if (!p.lost.empty()) {
       // A vertex or an edge that slid off the support's face keeps touching its boundary: the
       // contact goes on as a point contact with the boundary edge nearest to it; a face that
@@ -698,9 +694,6 @@ Island::PlanResult Island::plan(World& world, const std::vector<const ShapeGeome
     for (std::size_t k = 0; k < bodies.size(); ++k) {
       anchor_[k].v_W = p.bodies[k].v_W;
       anchor_[k].w_W = p.bodies[k].w_W;
-    }
-    if (std::getenv("PALPABLE_DEBUG_ISLAND")) {
-      for (int i : separating) std::fprintf(stderr, "  link %d separates\n", i);
     }
     if (!separating.empty()) {
       // Contacts that an impact sent apart let go; the rest are planned again without them.
@@ -803,9 +796,6 @@ Island::PlanResult Island::plan(World& world, const std::vector<const ShapeGeome
     const HeldContact& c = p.contacts[i];
     HeldLink& link = links[i];
     if (!c.active) {
-      if (std::getenv("PALPABLE_DEBUG_ISLAND")) {
-        std::fprintf(stderr, "  link %zu lets go (N %.3g)\n", i, modes.solution.forces[i].normal);
-      }
       released.push_back(static_cast<int>(i));
       continue;
     }
@@ -827,18 +817,6 @@ Island::PlanResult Island::plan(World& world, const std::vector<const ShapeGeome
   p = build_problem(*this, world, anchor_, t);
   const HeldSolution sol = solve_held(p.bodies, p.contacts);
   classify(world, geometry, p.contacts, sol);
-  if (std::getenv("PALPABLE_DEBUG_ISLAND")) {
-    static const char* names[] = {"rest", "uniform", "turntable", "integrated"};
-    std::fprintf(stderr, "%s t0 %.17g t_end %.17g steps %zu event %s link %d\n",
-                 names[static_cast<int>(motion)], t0, t_end, steps_.size(), to_string(event.kind),
-                 event.link);
-    for (std::size_t i = 0; i < p.contacts.size(); ++i) {
-      const HeldContact& c = p.contacts[i];
-      std::fprintf(stderr, "   contact %zu patch %d sticks %d N %.4g n %.3f %.3f %.3f gap %.3g\n",
-                   i, static_cast<int>(c.patch), c.sticks ? 1 : 0, sol.forces[i].normal, c.n_W.x(),
-                   c.n_W.y(), c.n_W.z(), links[i].gap);
-    }
-  }
   for (std::size_t k = 0; k < bodies.size(); ++k) world.bodies[bodies[k].index].state = anchor_[k];
   return result;
 }
@@ -1321,24 +1299,6 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
           {w_max[k], step.y0.segment<3>(o + 10).norm(), step.y1.segment<3>(o + 10).norm()});
     }
     steps_.push_back(step);
-    if (std::getenv("PALPABLE_DEBUG_STEPS")) {
-      Problem q;
-      const HeldSolution sq = solve_at(t + h, step.y1, q);
-      if (!q.contacts.empty()) {
-        const HeldContactMotion& m = sq.motion[0];
-        std::fprintf(stderr,
-                     "    h %.3g err %.3g slip %.3e spin %.3e N %.4g a %.3e patch %d sticks %d "
-                     "spin_sticks %d\n",
-                     h, step.error, plane_coords(q.contacts[0], m.slip_W).norm(),
-                     m.dw_W.dot(q.contacts[0].n_W), sq.forces[0].normal, sq.a_W[0].norm(),
-                     static_cast<int>(q.contacts[0].patch), q.contacts[0].sticks ? 1 : 0,
-                     q.contacts[0].spin_sticks ? 1 : 0);
-      }
-    }
-    if (std::getenv("PALPABLE_DEBUG_ISLAND") && steps_.size() % 2000 == 0) {
-      std::fprintf(stderr, "  step %zu t %.17g h %.3g err %.3g rejected %d\n", steps_.size(), t, h,
-                   step.error, rejected);
-    }
     if (theta_event <= 1.0) {
       t_end = t + theta_event * h;
       event = found;

@@ -10,7 +10,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <cstdlib>
 #include <map>
 
@@ -135,13 +134,6 @@ struct Simulation::Impl {
                          Pose{s2.x_W, s2.q_WM}, p.cache, settings().distance_max_steps);
     stats.feature_steps += static_cast<std::uint64_t>(dr.steps);
     if (dr.status == ContactStatus::kPenetrating) ++stats.penetrations;
-    if (dr.status == ContactStatus::kPenetrating && std::getenv("PALPABLE_DEBUG_ISLAND") &&
-        stats.penetrations % 100000 == 1) {
-      std::fprintf(
-          stderr, "penetrating %s-%s t %.17g depth %.3g pieces %d %d islands %d %d held %d\n",
-          body(p.a).name.c_str(), body(p.b).name.c_str(), now, dr.penetration_depth, dr.piece1,
-          dr.piece2, island_of[p.a.index], island_of[p.b.index], p.held ? 1 : 0);
-    }
     // DESIGN.md §5 step 6: no penetration deeper than the envelope (a polyhedron pair's depth is
     // unknown here: any overlap of one fails).
     PALPABLE_DCHECK(
@@ -275,13 +267,6 @@ struct Simulation::Impl {
             : time_of_impact(body(p.a), s1, pairs.geometry(p.a), body(p.b), s2, pairs.geometry(p.b),
                              dr, p.cache, world.gravity_W, settings());
     if (bound.floored) ++stats.floored_bounds;
-    if (bound.floored && std::getenv("PALPABLE_DEBUG_ISLAND") &&
-        stats.floored_bounds % 50000 == 1) {
-      std::fprintf(stderr, "floored %s-%s t %.17g d %.3g b %.3g a %.3g islands %d %d\n",
-                   body(p.a).name.c_str(), body(p.b).name.c_str(), t, dr.distance,
-                   bound.closing_speed, bound.closing_accel, island_of[p.a.index],
-                   island_of[p.b.index]);
-    }
     if (bound.exact) ++stats.exact_bounds;
     if (bound.exact && resting && bound.dt < floor) {
       // An exact time of impact of zero for a pair at rest in contact (an e = 0 collision without
@@ -290,13 +275,6 @@ struct Simulation::Impl {
       return kInfinity;
     }
     if (!(bound.dt >= 0.0)) return t + floor;  // NaN guard: never stall, never skip
-    if (std::getenv("PALPABLE_DEBUG_PAIR") &&
-        body(p.a).name + "-" + body(p.b).name == std::getenv("PALPABLE_DEBUG_PAIR")) {
-      std::fprintf(stderr, "bound %s-%s t %.17g d %.6g dt %.6g b %.4g a %.4g islands %d %d\n",
-                   body(p.a).name.c_str(), body(p.b).name.c_str(), t, dr.distance, bound.dt,
-                   bound.closing_speed, bound.closing_accel, island_of[p.a.index],
-                   island_of[p.b.index]);
-    }
     // The progress floor is applied (capped, so that it never carries a pair through contact)
     // by the bound itself; here only the resolution of the clock, so that t + dt > t.
     const double tick = 1e-12 * std::max(1.0, t);
@@ -472,11 +450,6 @@ struct Simulation::Impl {
     if ((gentle || round >= 2) && link) options.restitution = 0.0;
     CollisionRecord record = collide(p, c, t, options);
     if (observer) observer->on_collision(record);
-    if (std::getenv("PALPABLE_DEBUG_ISLAND")) {
-      std::fprintf(stderr, "collide %s-%s t %.17g u %.3g link %d gentle %d piece %d %d\n",
-                   body(a).name.c_str(), body(b).name.c_str(), t, record.approach_speed,
-                   link ? 1 : 0, gentle ? 1 : 0, dr.piece1, dr.piece2);
-    }
     const Vec3 u_after =
         point_velocity_W(body(a).state, record.p_W) - point_velocity_W(body(b).state, record.p_W);
     if (link && u_after.dot(record.n_W) < v_hold) {
@@ -523,14 +496,6 @@ struct Simulation::Impl {
       if (body(id).is_dynamic()) dynamic.push_back(id);
     }
     const std::uint32_t i = join(dynamic, t);
-    if (std::getenv("PALPABLE_DEBUG_ISLAND")) {
-      std::fprintf(
-          stderr,
-          "hold %s on %s: mover feature %zu support face %zu point_pair %d gap %.3g sphere %.3g\n",
-          body(link.mover).name.c_str(), body(link.support).name.c_str(),
-          link.mover_feature_M.size(), link.support_face_S.size(), link.point_pair ? 1 : 0,
-          link.gap, link.sphere_radius);
-    }
     islands[i].links.push_back(link);
     if (p.cache.piece_results().empty()) {
       p.held = true;
@@ -600,10 +565,6 @@ struct Simulation::Impl {
   // splits it where its links no longer connect it, frees bodies held by nothing, queues its next
   // event and refreshes its bodies' boxes and bounds.
   void replan(std::uint32_t i, double t) {
-    if (std::getenv("PALPABLE_DEBUG_ISLAND")) {
-      std::fprintf(stderr, "replan island %u at %.17g (%zu bodies, %zu links)\n", i, t,
-                   islands[i].bodies.size(), islands[i].links.size());
-    }
     std::vector<BodyId> touched = islands[i].bodies;
     for (BodyId id : touched) commit(id, t);
     std::vector<std::uint32_t> todo{i};
