@@ -304,7 +304,7 @@ HullPolygons convex_hull_polygons(const std::vector<Vec3>& points, double coplan
     throw InputError("coplanar_tolerance", "must be finite");
   }
   const double diagonal = (hi - lo).norm();
-  const double default_tolerance = Settings{}.hull_coplanar_tolerance * diagonal;
+  const double default_tolerance = kHullCoplanarTolerance * diagonal;
   const bool merge = coplanar_tolerance != 0.0;
   const double tolerance_m = coplanar_tolerance < 0.0 ? default_tolerance : coplanar_tolerance;
   check_points(points, std::max(tolerance_m, default_tolerance), diagonal);

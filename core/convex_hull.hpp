@@ -22,7 +22,7 @@ struct HullPolygons {
 
 // Throws InputError for fewer than 4 points, non-finite coordinates, and identical, collinear or
 // coplanar point sets (thinner than the tolerance). `coplanar_tolerance` [m]; negative: the
-// default Settings::hull_coplanar_tolerance times the diagonal of the points' bounding box; zero:
+// default kHullCoplanarTolerance times the diagonal of the points' bounding box; zero:
 // no merging beyond Qhull's (validation then uses the default tolerance).
 HullPolygons convex_hull_polygons(const std::vector<Vec3>& points, double coplanar_tolerance);
 

@@ -305,7 +305,7 @@ MassProperties mass_properties_from_inertia(double mass, const Mat3& inertia_M) 
   if (moments[0] + moments[1] < moments[2] * (1.0 - 1e-9)) {
     throw InputError("inertia", "breaks the triangle inequality I1 + I2 >= I3 of a rigid body");
   }
-  const double equal = Settings{}.equal_moment_tolerance * moments[2];
+  const double equal = kEqualMomentTolerance * moments[2];
   const Mat3 V = solver.eigenvectors();
   Mat3 R;  // columns: the principal axes in M
   const bool low_pair = moments[1] - moments[0] <= equal;

@@ -45,7 +45,7 @@ VolumeIntegrals shape_volume_integrals(const Shape& shape);
 MassProperties infinite_mass_properties();
 // From a mass and a symmetric positive-definite inertia tensor about the centre of mass in M:
 // principal moments ascending and q_MB a proper rotation. Where moments are equal (within
-// Settings::equal_moment_tolerance) the principal axes are chosen by a fixed rule: all equal ->
+// kEqualMomentTolerance) the principal axes are chosen by a fixed rule: all equal ->
 // q_MB = identity; two equal -> the unique axis from the eigen-solver, the other two from the M
 // axis least aligned with it. Throws InputError for a non-positive or non-finite mass or an
 // inertia that is not symmetric positive definite or breaks the triangle inequality.

@@ -3,8 +3,13 @@
 // unit, default and what changing it does. Scenes override these under "settings"; the command
 // line prints the values in effect. Derived tolerances are computed from these in one place
 // (derived_*) — no module keeps a private epsilon.
+#include <algorithm>
 #include <cmath>
+#include <optional>
+#include <string>
 #include <string_view>
+#include <variant>
+#include <vector>
 
 namespace palpable {
 
@@ -51,9 +56,10 @@ struct Settings {
   // accuracy knob of contact: resting/rolling error scales with it, event count with 1/sqrt(eps).
   double envelope_m = 1e-4;
 
-  // Approach speed below which a collision is a microcollision [m/s]. Negative: derived per
-  // contact as sqrt(2 g_n envelope) (DESIGN.md §4).
-  double microcollision_speed_mps = -1.0;
+  // Approach speed below which a collision is a microcollision [m/s]. Unset (the default):
+  // derived per contact as sqrt(2 g_n envelope), the speed of a fall through the envelope under
+  // the normal component g_n of gravity (derived_microcollision_speed).
+  std::optional<double> microcollision_speed_mps;
 
   // Relative slack of the microcollision test: approach speed <= v_micro (1 + slack) [-]. A
   // resting body returns at exactly v_micro, which must still count as a microcollision.
@@ -73,17 +79,6 @@ struct Settings {
   // tested for sticking), and an island of still bodies on fixed supports in equilibrium is at
   // rest. Slip that stops at an event is zero to rounding; this only absorbs that rounding.
   double still_speed_mps = 1e-9;
-
-  // Relative coplanarity tolerance of convex hulls built from points [-], times the diagonal of
-  // the points' bounding box: hull facets whose planes agree within it become one polygon face,
-  // and thinner point sets are rejected as coplanar. Larger merges more near-coplanar facets
-  // (fewer, slightly non-planar faces); smaller keeps them apart (more faces, slivers).
-  double hull_coplanar_tolerance = 1e-9;
-
-  // Relative tolerance under which principal moments of inertia count as equal [-], times the
-  // largest moment. Equal moments make the principal axes non-unique; they are then chosen by a
-  // fixed rule (DESIGN.md §2) so that the same shape always gets the same body frame.
-  double equal_moment_tolerance = 1e-10;
 
   // Relative difference of principal moments below which they count as equal [-] (ballistic
   // motion, core/ballistic.hpp): equal moments select the closed-form spherical or axisymmetric
@@ -128,5 +123,87 @@ struct Settings {
   // half an envelope deep when the pair is already inside half an envelope).
   double toi_min_progress_s = 1e-6;
 };
+
+// ---------------------------------------------------------------- derived tolerances
+// Computed here and nowhere else; the run summary prints them with the settings.
+
+// The gap a conservative time-of-impact bound aims at [m]: half the envelope, so that the pair is
+// checked again, inside the envelope, before it can touch (distance/toi_bound.cpp).
+inline double derived_target_gap(const Settings& s) { return 0.5 * s.envelope_m; }
+
+// How far apart a body may rest on another and still ride along when the lower one is hit by a
+// microcollision [m]: two envelopes (a microcollision bounces a body up to 1.5 envelopes).
+inline double derived_rider_distance(const Settings& s) { return 2.0 * s.envelope_m; }
+
+// The microcollision speed of a contact pressed by gravity g_n [m/s^2] along its normal [m/s]:
+// the setting when given, else sqrt(2 g_n envelope) (a fall through the envelope).
+inline double derived_microcollision_speed(const Settings& s, double g_n) {
+  if (s.microcollision_speed_mps) return *s.microcollision_speed_mps;
+  return std::sqrt(2.0 * std::max(g_n, 0.0) * s.envelope_m);
+}
+
+// The least step a pair's next check may take at time t [s]: toi_min_progress_s, and never less
+// than 1e-12 t, so that t + step > t however long the run.
+inline double derived_progress_floor(const Settings& s, double t) {
+  return std::max(s.toi_min_progress_s, 1e-12 * std::max(1.0, t));
+}
+
+// ---------------------------------------------------------------- named constants
+// Fixed numbers of the contact rules, named with their units; not settings because no scene has
+// a reason to change them (each is a rounding guard or a geometric convention).
+
+// A contact normal counts as support when within 60 degrees of "up" (against gravity): its
+// cosine with up exceeds this [-].
+inline constexpr double kSupportCosine = 0.5;
+// Riders are collected through at most this many levels of bodies resting on bodies [-].
+inline constexpr int kMaxRiderDepth = 8;
+// A contact pressed by gravity is approaching (collides) while u_n <= this x v_micro [-]: what an
+// e = 0 collision leaves is rounding, and must collide again.
+inline constexpr double kRestingApproachSlack = 1e-9;
+// Relative rounding of a relative normal velocity [-], times the bodies' contact-point speeds:
+// u_n below -this x scale is approaching, above is not.
+inline constexpr double kVelocityRounding = 1e-12;
+// Hulls built from points: relative coplanarity tolerance [-], times the diagonal of the points'
+// bounding box (facets whose planes agree within it become one face; thinner point sets are
+// rejected as coplanar). A scene's hull sets its own with "coplanar_tolerance".
+inline constexpr double kHullCoplanarTolerance = 1e-9;
+// Principal moments within this of each other, relative to the largest, count as equal [-]: the
+// principal axes are then chosen by a fixed rule (DESIGN.md §2), so the same shape always gets
+// the same body frame.
+inline constexpr double kEqualMomentTolerance = 1e-10;
+
+// ---------------------------------------------------------------- the table
+// Every setting once: scene key (under "/settings"), Settings member, unit, default, check and
+// meaning. The scene parser reads settings through it, the run summary prints every setting in
+// effect through it, and `palpable settings --markdown` prints the README's table from it.
+
+// A setting's value: a flag, an integer, a number, or a word (a choice, or "auto").
+using SettingValue = std::variant<bool, long long, double, std::string>;
+
+struct SettingInfo {
+  std::string_view key;      // scene key under /settings
+  std::string_view member;   // Settings member
+  std::string_view unit;     // SI unit, "-" for dimensionless, "" for flags and choices
+  std::string_view check;    // the accepted values, as an error message says "expected ..."
+  std::string_view meaning;  // one line
+  SettingValue (*get)(const Settings&);
+  // Sets the value if it passes the check; false (and `s` unchanged) otherwise.
+  bool (*set)(Settings& s, const SettingValue& value);
+};
+
+const std::vector<SettingInfo>& settings_table();
+
+// The value as it is written in a scene (numbers with 17 significant digits, shortest form).
+std::string format_setting(const SettingValue& value);
+
+// The derived tolerances in effect for a world whose gravity has magnitude g [m/s^2]: name,
+// unit, value, meaning.
+struct DerivedSetting {
+  std::string_view name;
+  std::string_view unit;
+  double value;
+  std::string_view meaning;
+};
+std::vector<DerivedSetting> derived_settings(const Settings& s, double gravity_mps2);
 
 }  // namespace palpable

@@ -43,7 +43,7 @@ class ConvexPolyhedron {
  public:
   // The convex hull of `points` (at least 4 not coplanar), via Qhull, coplanar facets merged.
   // `coplanar_tolerance` [m]: facets whose planes agree within it are merged into one face;
-  // negative: Settings::hull_coplanar_tolerance times the points' bounding-box diagonal; zero:
+  // negative: kHullCoplanarTolerance (core/settings.hpp) times the points' bounding-box diagonal; zero:
   // Qhull's own merging only. Interior and duplicate points are dropped; vertices within the
   // tolerance of an edge or face are not corners and are dropped too. Throws InputError for
   // fewer than 4 points, non-finite coordinates, identical, collinear or coplanar points.

@@ -200,7 +200,7 @@ ToiBound time_of_impact(const Body& body1, const BodyState& state1, const ShapeG
                         const Body& body2, const BodyState& state2, const ShapeGeometry& geometry2,
                         const DistanceResult& closest, const Vec3& gravity_W,
                         const Settings& settings) {
-  const double d_target = 0.5 * settings.envelope_m;
+  const double d_target = derived_target_gap(settings);
   const ShapeGeometry::Piece* sphere1 = centred_sphere(geometry1);
   const ShapeGeometry::Piece* sphere2 = centred_sphere(geometry2);
   ToiBound exact;
@@ -235,7 +235,7 @@ ToiBound time_of_impact(const Body& body1, const BodyState& state1, const ShapeG
                           settings);
   }
   // Body-level motions bound every piece: the rotation radius and reach cover all pieces.
-  const double d_target = 0.5 * settings.envelope_m;
+  const double d_target = derived_target_gap(settings);
   const ToiMotion m1 =
       toi_motion(body1, state1, geometry1, gravity_W, state2.x_W, geometry2.reach(), settings);
   const ToiMotion m2 =

@@ -25,8 +25,7 @@ CollisionResult direct_impulse(const Mat3& K_c, const Vec3& u0_c, const Vec3& p_
 }  // namespace
 
 double microcollision_speed(const Settings& settings, double g_n) {
-  if (settings.microcollision_speed_mps >= 0.0) return settings.microcollision_speed_mps;
-  return std::sqrt(2.0 * std::max(g_n, 0.0) * settings.envelope_m);
+  return derived_microcollision_speed(settings, g_n);
 }
 
 bool is_microcollision(double u_z0, double v_micro, const Settings& settings) {

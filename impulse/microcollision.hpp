@@ -37,7 +37,8 @@ struct MicrocollisionContext {
   double surface_spin = 0.0;
 };
 
-// v_micro [m/s]: Settings::microcollision_speed_mps if set (>= 0), else sqrt(2 g_n envelope);
+// v_micro [m/s]: derived_microcollision_speed (core/settings.hpp): the setting if given, else
+// sqrt(2 g_n envelope);
 // a negative g_n counts as 0 (never a negative value under the square root).
 double microcollision_speed(const Settings& settings, double g_n);
 

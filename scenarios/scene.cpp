@@ -4,6 +4,7 @@
 #include "core/mass_properties.hpp"
 #include "core/shape.hpp"
 
+#include <climits>
 #include <cmath>
 #include <fstream>
 #include <iostream>
@@ -242,79 +243,31 @@ Material parse_material(const Reader& r, const json& value, const std::string& p
   return m;
 }
 
+// Every key of core/settings.hpp's table, read and checked through it.
 void parse_settings(const Reader& r, const json& value, const std::string& path, Settings& s) {
   r.object(value, path);
-  r.only_keys(value, path,
-              {"envelope", "microcollision_speed", "integration_tolerance", "restitution_law",
-               "microcollision_rule", "retry_limit", "centre_of_pressure", "broad_phase_horizon",
-               "broad_phase_max_sweep", "contact_model"});
-  if (value.contains("contact_model")) {
-    const std::string model = r.string(value["contact_model"], path + "/contact_model");
-    if (model == "persistent") {
-      s.contact_model = ContactModel::kPersistent;
-    } else if (model == "microcollisions") {
-      s.contact_model = ContactModel::kMicrocollisions;
+  std::set<std::string> keys;
+  for (const SettingInfo& info : settings_table()) keys.insert(std::string(info.key));
+  r.only_keys(value, path, keys);
+  for (const SettingInfo& info : settings_table()) {
+    auto it = value.find(std::string(info.key));
+    if (it == value.end()) continue;
+    const std::string where = path + "/" + std::string(info.key);
+    SettingValue v;
+    if (it->is_boolean()) {
+      v = it->get<bool>();
+    } else if (it->is_number_integer() &&
+               !(it->is_number_unsigned() &&
+                 it->get<unsigned long long>() > static_cast<unsigned long long>(LLONG_MAX))) {
+      v = it->get<long long>();
+    } else if (it->is_number()) {
+      v = it->get<double>();
+    } else if (it->is_string()) {
+      v = it->get<std::string>();
     } else {
-      r.fail_value(path + "/contact_model", value["contact_model"],
-                   "\"persistent\" or \"microcollisions\"");
+      r.fail_value(where, *it, std::string(info.check));
     }
-  }
-  if (value.contains("centre_of_pressure")) {
-    const json& v = value["centre_of_pressure"];
-    if (!v.is_boolean()) r.fail_value(path + "/centre_of_pressure", v, "true or false");
-    s.centre_of_pressure = v.get<bool>();
-  }
-  if (value.contains("broad_phase_horizon")) {
-    s.broad_phase_horizon_s =
-        r.positive(value["broad_phase_horizon"], path + "/broad_phase_horizon");
-  }
-  if (value.contains("broad_phase_max_sweep")) {
-    s.broad_phase_max_sweep =
-        r.positive(value["broad_phase_max_sweep"], path + "/broad_phase_max_sweep");
-  }
-  if (value.contains("envelope")) s.envelope_m = r.positive(value["envelope"], path + "/envelope");
-  if (value.contains("microcollision_speed")) {
-    s.microcollision_speed_mps =
-        r.positive(value["microcollision_speed"], path + "/microcollision_speed");
-  }
-  if (value.contains("integration_tolerance")) {
-    s.integration_tolerance =
-        r.positive(value["integration_tolerance"], path + "/integration_tolerance");
-    if (s.integration_tolerance >= 1.0 || s.integration_tolerance < 1e-15) {
-      r.fail_value(path + "/integration_tolerance", value["integration_tolerance"],
-                   "a relative tolerance in [1e-15, 1)");
-    }
-  }
-  if (value.contains("restitution_law")) {
-    std::string law = r.string(value["restitution_law"], path + "/restitution_law");
-    if (law == "stronge") {
-      s.restitution_law = RestitutionLaw::kStronge;
-    } else if (law == "poisson") {
-      s.restitution_law = RestitutionLaw::kPoisson;
-    } else if (law == "newton") {
-      s.restitution_law = RestitutionLaw::kNewton;
-    } else {
-      r.fail_value(path + "/restitution_law", value["restitution_law"],
-                   "\"stronge\", \"poisson\" or \"newton\"");
-    }
-  }
-  if (value.contains("microcollision_rule")) {
-    std::string rule = r.string(value["microcollision_rule"], path + "/microcollision_rule");
-    if (rule == "drift_free") {
-      s.microcollision_rule = MicrocollisionRule::kDriftFree;
-    } else if (rule == "reversal") {
-      s.microcollision_rule = MicrocollisionRule::kReversal;
-    } else {
-      r.fail_value(path + "/microcollision_rule", value["microcollision_rule"],
-                   "\"drift_free\" or \"reversal\"");
-    }
-  }
-  if (value.contains("retry_limit")) {
-    const json& v = value["retry_limit"];
-    if (!v.is_number_integer() || v.get<long long>() < 1 || v.get<long long>() > 1000000) {
-      r.fail_value(path + "/retry_limit", v, "an integer from 1 to 1000000");
-    }
-    s.retry_limit = v.get<int>();
+    if (!info.set(s, v)) r.fail_value(where, *it, std::string(info.check));
   }
 }
 
@@ -502,6 +455,18 @@ void apply_override(json& doc, const std::string& assignment) {
   }
   try {
     json::json_pointer pointer(pointer_text);
+    // Missing optional objects on the way are created (`/settings/envelope` on a scene with no
+    // "settings"); the scene parser then checks every key, so a misspelt one is still named.
+    std::vector<json::json_pointer> ancestors;
+    for (json::json_pointer q = pointer.parent_pointer(); !q.empty(); q = q.parent_pointer()) {
+      ancestors.push_back(q);
+    }
+    for (auto q = ancestors.rbegin(); q != ancestors.rend(); ++q) {
+      json& container = doc.at(q->parent_pointer());
+      if (container.is_object() && !container.contains(q->back())) {
+        container[q->back()] = json::object();
+      }
+    }
     json& parent = doc.at(pointer.parent_pointer());
     if (parent.is_array()) {
       const std::string& last = pointer.back();
@@ -523,6 +488,21 @@ void apply_override(json& doc, const std::string& assignment) {
   } catch (const std::invalid_argument&) {
     throw InputError("--set " + assignment, "array index is not a number");
   }
+}
+
+json settings_json(const Settings& settings, double gravity_mps2) {
+  json out = json::object();
+  for (const SettingInfo& info : settings_table()) {
+    const SettingValue v = info.get(settings);
+    json& slot = out[std::string(info.key)];
+    std::visit([&slot](const auto& x) { slot = x; }, v);
+  }
+  json derived = json::object();
+  for (const DerivedSetting& d : derived_settings(settings, gravity_mps2)) {
+    derived[std::string(d.name)] = d.value;
+  }
+  out["derived"] = derived;
+  return out;
 }
 
 }  // namespace palpable

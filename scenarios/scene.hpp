@@ -31,4 +31,8 @@ nlohmann::json read_json_file(const std::string& path);
 // JSON is taken as a string). The parent of the pointer must exist. Throws InputError.
 void apply_override(nlohmann::json& document, const std::string& assignment);
 
+// Every setting in effect (core/settings.hpp's table, scene keys), with the derived tolerances
+// under "derived" for a world whose gravity has magnitude gravity_mps2 [m/s^2].
+nlohmann::json settings_json(const Settings& settings, double gravity_mps2);
+
 }  // namespace palpable

@@ -13,9 +13,6 @@ namespace palpable {
 
 namespace {
 
-// How steep a contact normal must be to count as support, cos 60 degrees from the vertical.
-constexpr double kSupportCosine = 0.5;
-
 // Is the point q (on the plane of the convex polygon `patch`, counter-clockwise about n) inside?
 bool inside_convex_polygon(const std::vector<Vec3>& patch, const Vec3& n, const Vec3& q) {
   for (std::size_t i = 0; i < patch.size(); ++i) {
@@ -384,18 +381,18 @@ bool approaching(const Contact& c) {
   // Two dynamic bodies share gravity, so nothing presses them together at rest: a body resting
   // on another rides along when the lower one bounces on its support (see carries_riders).
   if (c.g_n > 0.0 && (c.dynamic != DynamicSide::kBoth || c.held_acceleration)) {
-    return c.u_n <= 1e-9 * c.v_micro;
+    return c.u_n <= kRestingApproachSlack * c.v_micro;
   }
   const double scale =
       contact_point_velocity_W(c.body1).norm() + contact_point_velocity_W(c.body2).norm();
-  return c.u_n < -1e-12 * scale;
+  return c.u_n < -kVelocityRounding * scale;
 }
 
 bool patch_approaching(const Contact& c, const BodyState& s1, const BodyState& s2) {
   const double scale =
       contact_point_velocity_W(c.body1).norm() + contact_point_velocity_W(c.body2).norm();
   for (const Vec3& q : c.patch) {
-    if ((point_velocity_W(s1, q) - point_velocity_W(s2, q)).dot(c.n_W) < -1e-12 * scale) {
+    if ((point_velocity_W(s1, q) - point_velocity_W(s2, q)).dot(c.n_W) < -kVelocityRounding * scale) {
       return true;
     }
   }

@@ -122,11 +122,8 @@ struct Simulation::Impl {
     }
   }
 
-  // The least step a pair's next check may take at time t [s]: settings.toi_min_progress_s, and
-  // never less than 1e-12 t, so that t + step > t however long the run.
-  double progress_floor(double t) const {
-    return std::max(settings().toi_min_progress_s, 1e-12 * std::max(1.0, t));
-  }
+  // The least step a pair's next check may take at time t [s] (core/settings.hpp).
+  double progress_floor(double t) const { return derived_progress_floor(settings(), t); }
 
   DistanceResult query(PairSet::Pair& p, const BodyState& s1, const BodyState& s2) {
     DistanceResult dr =
@@ -199,7 +196,7 @@ struct Simulation::Impl {
     if (!(p.lifted && p.last_collision_t == t)) return false;
     const double scale =
         contact_point_velocity_W(c.body1).norm() + contact_point_velocity_W(c.body2).norm();
-    return !(c.u_n < -1e-12 * scale);
+    return !(c.u_n < -kVelocityRounding * scale);
   }
 
   // How a body moves over the coming interval, for a bound: free flight, or its island's motion.
@@ -225,7 +222,7 @@ struct Simulation::Impl {
                                const DistanceResult& dr) const {
     const ToiMotion m1 = motion_for(p.a, s1, s2, p.b);
     const ToiMotion m2 = motion_for(p.b, s2, s1, p.a);
-    const double d_target = 0.5 * settings().envelope_m;
+    const double d_target = derived_target_gap(settings());
     if (p.cache.piece_results().empty()) return toi_bound(m1, m2, dr, d_target, settings());
     ToiBound best;
     for (const DistanceResult& piece : p.cache.piece_results()) {
@@ -296,15 +293,12 @@ struct Simulation::Impl {
 
   // ---------------------------------------------------------------- collisions
 
-  // How steep a contact normal must be to count as support, cos 60 degrees from the vertical.
-  static constexpr double kSupportCosine = 0.5;
-
   // The dynamic bodies riding on body `id` at time t: resting on it (within two envelopes, a
   // microcollision bounces a body up to 1.5; the normal within 60 degrees of the vertical;
   // at rest on it along the normal or settling onto it slower than the microcollision speed),
-  // and those riding on them, up to 8 levels. Appended to `riders` (no repeats).
+  // and those riding on them, up to kMaxRiderDepth levels. Appended to `riders` (no repeats).
   void collect_riders(BodyId id, double t, int depth, std::vector<BodyId>& riders) {
-    if (depth > 8 || world.gravity_W.squaredNorm() == 0.0) return;
+    if (depth > kMaxRiderDepth || world.gravity_W.squaredNorm() == 0.0) return;
     const Vec3 up = -world.gravity_W.normalized();
     // query() only warms a pair's cache: the pair lists do not change here.
     for (std::uint32_t index : pairs.body(id).pairs) {
@@ -318,7 +312,7 @@ struct Simulation::Impl {
       ++stats.bound_queries;
       const DistanceResult dr = query(q, s1, s2);
       if (dr.status != ContactStatus::kSeparated && dr.status != ContactStatus::kTouching) continue;
-      if (dr.distance > 2.0 * settings().envelope_m) continue;
+      if (dr.distance > derived_rider_distance(settings())) continue;
       const Vec3 n = q.a == other ? dr.n_W : Vec3(-dr.n_W);  // from `id` up to `other`
       if (n.dot(up) <= kSupportCosine) continue;
       const BodyState& s_other = q.a == other ? s1 : s2;
@@ -326,7 +320,10 @@ struct Simulation::Impl {
       const double v_micro = microcollision_speed(settings(), std::abs(world.gravity_W.dot(n)));
       // Resting on it or settling onto it, not flying off it.
       const double u_rel = n.dot(s_other.v_W - s_id.v_W);
-      if (u_rel > 1e-9 * v_micro || u_rel < -v_micro * (1.0 + 1e-6)) continue;
+      if (u_rel > kRestingApproachSlack * v_micro ||
+          u_rel < -v_micro * (1.0 + settings().microcollision_speed_slack)) {
+        continue;
+      }
       riders.push_back(other);
       collect_riders(other, t, depth + 1, riders);
     }

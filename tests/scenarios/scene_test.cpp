@@ -6,6 +6,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <cmath>
 #include <fstream>
 
 using nlohmann::json;
@@ -75,11 +76,71 @@ TEST_CASE("overrides address the scene by JSON pointer", "[scenarios][scene]") {
 
   CHECK_THROWS_WITH(palpable::apply_override(doc, "settings/envelope=1"),
                     Catch::Contains("/json/pointer=value"));
-  CHECK_THROWS_WITH(palpable::apply_override(doc, "/nothing/here=1"),
-                    Catch::Contains("no such place"));
+  CHECK_THROWS_WITH(palpable::apply_override(doc, "/end_time/x=1"),
+                    Catch::Contains("/end_time is not an object or array"));
   CHECK_THROWS_WITH(palpable::apply_override(doc, "/bodies/7/mass=1"),
                     Catch::Contains("out of range"));
   CHECK_THROWS_WITH(palpable::apply_override(doc, "/bodies/9=1"), Catch::Contains("past the end"));
+}
+
+TEST_CASE("overrides create the optional objects they address", "[scenarios][scene]") {
+  json corpus = load_corpus();
+  json doc = corpus["base"];
+  doc.erase("settings");
+  doc.erase("output");
+  palpable::apply_override(doc, "/settings/envelope=1e-6");
+  palpable::apply_override(doc, "/output/interval=0.5");
+  palpable::Scene scene = palpable::scene_from_json(doc, "base.json");
+  CHECK(scene.world.settings.envelope_m == 1e-6);
+  CHECK(scene.output_interval == 0.5);
+
+  // A misspelt object is created too, and then named by the parser.
+  palpable::apply_override(doc, "/setings/envelope=1");
+  CHECK_THROWS_WITH(palpable::scene_from_json(doc, "base.json"),
+                    Catch::Contains("base.json:/setings") && Catch::Contains("unknown key"));
+}
+
+TEST_CASE("every setting of the table is read from a scene and printed in effect",
+          "[scenarios][scene][settings]") {
+  const palpable::Settings defaults;
+  json corpus = load_corpus();
+  for (const palpable::SettingInfo& info : palpable::settings_table()) {
+    const std::string key(info.key);
+    CAPTURE(key);
+    // The default written back reads to the same value.
+    const json printed = palpable::settings_json(defaults, 9.81).at(key);
+    json doc = corpus["base"];
+    doc["settings"] = json::object({{key, printed}});
+    const palpable::Scene scene = palpable::scene_from_json(doc, "s.json");
+    CHECK(palpable::format_setting(info.get(scene.world.settings)) ==
+          palpable::format_setting(info.get(defaults)));
+    // A value of the wrong kind is rejected naming the pointer and the check.
+    doc["settings"] = json::object({{key, json::array()}});
+    CHECK_THROWS_WITH(palpable::scene_from_json(doc, "s.json"),
+                      Catch::Contains("s.json:/settings/" + key) &&
+                          Catch::Contains(std::string(info.check)));
+  }
+  // A changed value is the one printed.
+  json doc = corpus["base"];
+  doc["settings"] = {{"microcollision_speed", 0.25}, {"retry_limit", 7}, {"still_speed", 0}};
+  const palpable::Scene scene = palpable::scene_from_json(doc, "s.json");
+  const json printed = palpable::settings_json(scene.world.settings, 9.81);
+  CHECK(printed["microcollision_speed"] == 0.25);
+  CHECK(printed["retry_limit"] == 7);
+  CHECK(printed["still_speed"] == 0.0);
+  CHECK(palpable::settings_json(palpable::Settings{}, 9.81)["microcollision_speed"] == "auto");
+  // Derived: sqrt(2 g envelope) at the default envelope, half an envelope of target gap.
+  const json derived = palpable::settings_json(palpable::Settings{}, 9.81)["derived"];
+  CHECK(derived["microcollision_speed"].get<double>() == std::sqrt(2.0 * 9.81 * 1e-4));
+  CHECK(derived["target_gap"].get<double>() == 0.5e-4);
+  // Out of range: integers that are not, numbers outside the checks.
+  for (const json& bad : {json{{"retry_limit", 1.5}}, json{{"retry_limit", 0}},
+                          json{{"integration_tolerance", 1.0}}, json{{"envelope", -1.0}},
+                          json{{"microcollision_speed", "fast"}}, json{{"contact_model", 1}}}) {
+    CAPTURE(bad.dump());
+    doc["settings"] = bad;
+    CHECK_THROWS_AS(palpable::scene_from_json(doc, "s.json"), InputError);
+  }
 }
 
 TEST_CASE("a file that is not JSON is named in the error", "[scenarios][scene]") {

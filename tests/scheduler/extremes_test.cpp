@@ -187,8 +187,8 @@ class Checker : public SimulationObserver {
     //    the relative velocity of the contact points right after the collision.
     const double g_n = std::abs(world_.gravity_W.dot(r.n_W));
     if (g_n > 0.0) {
-      const double v_micro = settings.microcollision_speed_mps >= 0.0
-                                 ? settings.microcollision_speed_mps
+      const double v_micro = settings.microcollision_speed_mps
+                                 ? *settings.microcollision_speed_mps
                                  : std::sqrt(2.0 * g_n * settings.envelope_m);
       const BodyState sa = sim->state_at(r.a, r.t), sb = sim->state_at(r.b, r.t);
       const Vec3 u_after = point_velocity_W(sa, r.p_W) - point_velocity_W(sb, r.p_W);

@@ -204,11 +204,7 @@ nlohmann::json summary_json(const RunResult& r) {
                      {"max_pairs", s.max_pairs},
                      {"box_tests", s.box_tests}};
   const Settings& st = r.scene.world.settings;
-  j["settings"] = {{"envelope", st.envelope_m},
-                   {"microcollision_speed", st.microcollision_speed_mps},
-                   {"integration_tolerance", st.integration_tolerance},
-                   {"restitution_law", std::string(to_string(st.restitution_law))},
-                   {"microcollision_rule", std::string(to_string(st.microcollision_rule))}};
+  j["settings"] = settings_json(st, r.scene.world.gravity_W.norm());
   if (!r.reference.is_null()) j["reference"] = r.reference;
   return j;
 }

@@ -1,0 +1,21 @@
+# Keeps the README's settings table equal to `palpable settings --markdown` (the one table in
+# core/settings.hpp). Usage: cmake -DPALPABLE=<exe> -DREADME=<README.md> -P check_readme_settings.cmake
+execute_process(COMMAND ${PALPABLE} settings --markdown OUTPUT_VARIABLE expected RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "palpable settings --markdown failed (${rc})")
+endif()
+file(READ ${README} readme)
+string(FIND "${readme}" "<!-- settings-table:begin -->\n" begin)
+string(FIND "${readme}" "<!-- settings-table:end -->" end)
+if(begin EQUAL -1 OR end EQUAL -1)
+  message(FATAL_ERROR "${README}: no <!-- settings-table:begin/end --> markers")
+endif()
+string(LENGTH "<!-- settings-table:begin -->\n" marker)
+math(EXPR from "${begin} + ${marker}")
+math(EXPR length "${end} - ${from}")
+string(SUBSTRING "${readme}" ${from} ${length} actual)
+if(NOT actual STREQUAL expected)
+  message(FATAL_ERROR "${README}: the settings table differs from `palpable settings --markdown`; "
+                      "paste its output between the markers")
+endif()
+message(STATUS "README settings table matches")
