@@ -1,0 +1,125 @@
+// Collisions (Simulation::Impl, scheduler/simulation_impl.hpp): a pair's check event, the
+// riders a microcollision carries, and the contact model's resolution committed to the bodies.
+#include "scheduler/simulation_impl.hpp"
+
+#include "core/check.hpp"
+#include "distance/closest_features.hpp"
+#include "impulse/microcollision.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+namespace palpable {
+
+void Simulation::Impl::collect_riders(BodyId id, double t, int depth, std::vector<BodyId>& riders) {
+  if (depth > kMaxRiderDepth || world.gravity_W.squaredNorm() == 0.0) return;
+  const Vec3 up = -world.gravity_W.normalized();
+  // query() only warms a pair's cache: the pair lists do not change here.
+  for (std::uint32_t index : pairs.body(id).pairs) {
+    PairSet::Pair& q = pairs.pair(index);
+    const BodyId other = q.a == id ? q.b : q.a;
+    if (!body(other).is_dynamic() ||
+        std::find(riders.begin(), riders.end(), other) != riders.end()) {
+      continue;
+    }
+    const BodyState s1 = extrapolate(q.a, t), s2 = extrapolate(q.b, t);
+    ++stats.bound_queries;
+    const DistanceResult dr = query(q, s1, s2);
+    if (dr.status != ContactStatus::kSeparated && dr.status != ContactStatus::kTouching) continue;
+    if (dr.distance > derived_rider_distance(settings())) continue;
+    const Vec3 n = q.a == other ? dr.n_W : Vec3(-dr.n_W);  // from `id` up to `other`
+    if (n.dot(up) <= kSupportCosine) continue;
+    const BodyState& s_other = q.a == other ? s1 : s2;
+    const BodyState& s_id = q.a == other ? s2 : s1;
+    const double v_micro = microcollision_speed(settings(), std::abs(world.gravity_W.dot(n)));
+    // Resting on it or settling onto it, not flying off it.
+    const double u_rel = n.dot(s_other.v_W - s_id.v_W);
+    if (u_rel > kRestingApproachSlack * v_micro ||
+        u_rel < -v_micro * (1.0 + settings().microcollision_speed_slack)) {
+      continue;
+    }
+    riders.push_back(other);
+    collect_riders(other, t, depth + 1, riders);
+  }
+}
+
+CollisionRecord Simulation::Impl::collide(const PairSet::Pair& p, Contact& c, double t,
+                                          const ResolveOptions& options) {
+  std::vector<BodyId> rider_ids;
+  if (options.microcollisions && carries_riders(c, settings(), world.gravity_W)) {
+    collect_riders(c.dynamic1() ? p.a : p.b, t, 0, rider_ids);
+    for (BodyId r : rider_ids) commit(r, t);
+  }
+  std::vector<Rider> riders;
+  for (BodyId r : rider_ids) riders.push_back(Rider{r, body(r), body(r).state});
+  Resolution out = resolve(c, side(p.a, body(p.a).state), side(p.b, body(p.b).state),
+                           world.material(p.a, p.b), settings(), riders, t, options);
+  stats.integration_steps += static_cast<std::uint64_t>(out.integration_steps);
+  stats.impulse_failures += static_cast<std::uint64_t>(out.impulse_failures);
+  auto store = [&](BodyId id, const Vec3& v, const Vec3& w) {
+    Body& b = body(id);
+    if (!b.is_dynamic()) return;
+    b.state.v_W = v;
+    b.state.w_W = w;
+  };
+  store(p.a, out.v1_W, out.w1_W);
+  store(p.b, out.v2_W, out.w2_W);
+  for (std::size_t i = 0; i < out.record.carried.size(); ++i) {
+    body(out.record.carried[i]).state.v_W = out.rider_v_W[i];
+  }
+  if (out.record.kind == CollisionKind::kMicrocollision) {
+    ++stats.microcollisions;
+  } else {
+    ++stats.collisions;
+  }
+  if (out.record.centre_of_pressure) ++stats.centre_of_pressure;
+  stats.riders_carried += out.record.carried.size();
+  return std::move(out.record);
+}
+
+std::optional<CollisionRecord> Simulation::Impl::check_pair(std::uint32_t index, double t) {
+  PairSet::Pair& p = pairs.pair(index);
+  p.event = EventQueue::kNoEvent;  // it was just popped
+  commit(p.a, t);
+  commit(p.b, t);
+  const BodyState& s1 = body(p.a).state;
+  const BodyState& s2 = body(p.b).state;
+  ++stats.pair_checks;
+  DistanceResult dr = query(p, s1, s2);
+  const DistanceResult& contact = contact_result(p, s1, s2, dr);
+  if (contact.status == ContactStatus::kFailed ||
+      (contact.status != ContactStatus::kPenetrating && contact.distance > settings().envelope_m)) {
+    schedule_pair(index, next_check_time(p, s1, s2, dr, t));
+    return std::nullopt;
+  }
+  Contact c = make_contact(side(p.a, s1), side(p.b, s2), contact, settings(), world.gravity_W,
+                           /*with_patch=*/true);
+  // Under the persistent model a face whose corner lands is a collision even while its centre
+  // of pressure does not approach (the hold, not a microcollision train, must catch it).
+  const bool lands = approaching(c) || (persistent() && patch_approaching(c, s1, s2));
+  if (!lands || lifting(p, c, t)) {
+    schedule_pair(index, next_check_time(p, s1, s2, dr, t, &c));
+    return std::nullopt;
+  }
+  if (t == p.last_collision_t) {
+    ++p.collisions_at_t;
+    ++stats.retries;
+    if (p.collisions_at_t > settings().retry_limit) {
+      // A rounding loop: report it and move on by the progress floor.
+      ++stats.retry_limit_hits;
+      schedule_pair(index, t + progress_floor(t));
+      return std::nullopt;
+    }
+  } else {
+    p.last_collision_t = t;
+    p.collisions_at_t = 0;
+  }
+  if (persistent()) return collide_or_hold(index, c, DistanceResult(contact), t);
+  CollisionRecord record = collide(p, c, t);
+  if (observer) observer->on_collision(record);
+  refresh_after_collision(record, t);  // `p` may move when pairs are created there
+  return record;
+}
+
+}  // namespace palpable

@@ -1,0 +1,314 @@
+// Persistent contact (Simulation::Impl, scheduler/simulation_impl.hpp): a contact that persists is
+// held (scheduler/island.hpp); islands of held bodies are joined, split, planned and their events
+// handled here.
+#include "scheduler/simulation_impl.hpp"
+
+#include "core/check.hpp"
+#include "distance/closest_features.hpp"
+#include "impulse/microcollision.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+namespace palpable {
+
+void Simulation::Impl::report(const char* kind, BodyId a, BodyId b, const Vec3& p_W, double t) {
+  if (observer) observer->on_mode_change(ModeChange{t, kind, a, b, p_W});
+}
+
+CollisionRecord Simulation::Impl::collide_or_hold(std::uint32_t index, Contact& c,
+                                                  const DistanceResult& dr, double t) {
+  PairSet::Pair& p = pairs.pair(index);
+  const BodyId a = p.a, b = p.b;
+  // A pair colliding again at the same instant is one whose bodies' other contacts (held, and
+  // resolved after it, not with it) keep sending it back: a train of rebounds shrinking by the
+  // restitution. Its limit is the plastic collision, taken at once from the third round; from
+  // the fifth, a hold that keeps letting go at once gives way to a microcollision, whose
+  // rebound floor moves the pair on in time.
+  const int round = t == p.last_collision_t ? p.collisions_at_t : 0;
+  const std::optional<HeldLink> link = round >= 4 ? std::optional<HeldLink>() : link_of(index, dr);
+  // The hand-over speed: the microcollision speed of the bodies' weight along the normal (a
+  // held body's acceleration may be zero, its weight is not).
+  const double v_hold =
+      std::max(c.v_micro, microcollision_speed(settings(), std::abs(world.gravity_W.dot(c.n_W))));
+  const bool gentle =
+      -initial_normal_velocity(c) <= v_hold * (1.0 + settings().microcollision_speed_slack);
+  ResolveOptions options;
+  options.microcollisions = !link;
+  if ((gentle || round >= 2) && link) options.restitution = 0.0;
+  CollisionRecord record = collide(p, c, t, options);
+  if (observer) observer->on_collision(record);
+  const Vec3 u_after =
+      point_velocity_W(body(a).state, record.p_W) - point_velocity_W(body(b).state, record.p_W);
+  if (link && u_after.dot(record.n_W) < v_hold) {
+    hold(index, *link, dr, t);
+  } else {
+    after_collision(record, t);
+  }
+  return record;
+}
+
+std::optional<HeldLink> Simulation::Impl::link_of(std::uint32_t index,
+                                                  const DistanceResult& dr) const {
+  const PairSet::Pair& p = pairs.pair(index);
+  const Body& ba = body(p.a);
+  const Body& bb = body(p.b);
+  const ContactGeometry g =
+      contact_geometry(pairs.geometry(p.a), Pose{ba.state.x_W, ba.state.q_WM}, pairs.geometry(p.b),
+                       Pose{bb.state.x_W, bb.state.q_WM}, dr, settings().envelope_m);
+  return make_held_link(index, p.a, p.b, LinkSide{ba, pairs.geometry(p.a), ba.state},
+                        LinkSide{bb, pairs.geometry(p.b), bb.state}, dr, g);
+}
+
+void Simulation::Impl::after_collision(const CollisionRecord& record, double t) {
+  CollisionRecord free_part = record;
+  free_part.carried.clear();
+  std::vector<int> replanned;
+  for (BodyId id : {record.a, record.b}) {
+    const int i = island_of[id.index];
+    if (i >= 0 && std::find(replanned.begin(), replanned.end(), i) == replanned.end()) {
+      replanned.push_back(i);
+      replan(static_cast<std::uint32_t>(i), t);
+    }
+  }
+  refresh_after_collision(free_part, t);
+}
+
+void Simulation::Impl::hold(std::uint32_t index, const HeldLink& link, const DistanceResult& dr,
+                            double t) {
+  PairSet::Pair& p = pairs.pair(index);
+  std::vector<BodyId> dynamic;
+  for (BodyId id : {p.a, p.b}) {
+    if (body(id).is_dynamic()) dynamic.push_back(id);
+  }
+  const std::uint32_t i = join(dynamic, t);
+  islands[i].links.push_back(link);
+  if (p.cache.piece_results().empty()) {
+    p.held = true;
+    schedule_pair(index, kInfinity);
+  }
+  ++stats.holds;
+  report("hold", p.a, p.b, dr.p2_W, t);
+  replan(i, t);
+}
+
+std::uint32_t Simulation::Impl::join(const std::vector<BodyId>& ids, double t) {
+  int target = -1;
+  for (BodyId id : ids) {
+    const int i = island_of[id.index];
+    if (i < 0) continue;
+    if (target < 0) {
+      target = i;
+    } else if (i != target) {
+      Island& from = islands[static_cast<std::size_t>(i)];
+      Island& to = islands[static_cast<std::size_t>(target)];
+      for (BodyId b : from.bodies) {
+        commit(b, t);
+        to.bodies.push_back(b);
+        island_of[b.index] = target;
+      }
+      to.links.insert(to.links.end(), from.links.begin(), from.links.end());
+      release_slot(static_cast<std::uint32_t>(i));
+    }
+  }
+  if (target < 0) target = static_cast<int>(new_slot());
+  Island& is = islands[static_cast<std::size_t>(target)];
+  for (BodyId id : ids) {
+    if (island_of[id.index] == target) continue;
+    commit(id, t);
+    is.bodies.push_back(id);
+    island_of[id.index] = target;
+  }
+  return static_cast<std::uint32_t>(target);
+}
+
+std::uint32_t Simulation::Impl::new_slot() {
+  std::uint32_t i;
+  if (!free_islands.empty()) {
+    i = free_islands.back();
+    free_islands.pop_back();
+  } else {
+    i = static_cast<std::uint32_t>(islands.size());
+    islands.emplace_back();
+    island_events.push_back(EventQueue::kNoEvent);
+    island_live.push_back(false);
+  }
+  islands[i] = Island{};
+  island_live[i] = true;
+  return i;
+}
+
+void Simulation::Impl::release_slot(std::uint32_t i) {
+  if (island_events[i] != EventQueue::kNoEvent) queue.erase(island_events[i]);
+  island_events[i] = EventQueue::kNoEvent;
+  islands[i] = Island{};
+  island_live[i] = false;
+  free_islands.push_back(i);
+}
+
+void Simulation::Impl::replan(std::uint32_t i, double t) {
+  std::vector<BodyId> touched = islands[i].bodies;
+  for (BodyId id : touched) commit(id, t);
+  std::vector<std::uint32_t> todo{i};
+  // Components of the links among dynamic bodies; every body reached by a link stays held.
+  while (!todo.empty()) {
+    const std::uint32_t k = todo.back();
+    todo.pop_back();
+    Island& is = islands[k];
+    const Island::PlanResult r = is.plan(world, geometries, t);
+    ++stats.island_plans;
+    if (r.inconsistent) ++stats.held_inconsistent;
+    for (std::uint32_t pair : r.released) {
+      PairSet::Pair& q = pairs.pair(pair);
+      q.held = false;
+      q.lifted = true;
+      q.last_collision_t = t;
+      q.collisions_at_t = 0;
+      report("release", q.a, q.b, body(q.a).state.x_W, t);
+    }
+    bool changed = false;
+    for (std::uint32_t extra : split(k, t, changed)) todo.push_back(extra);
+    if (changed) {
+      todo.push_back(k);  // its motion was planned with bodies it no longer has
+      continue;
+    }
+    schedule_island(k, t);
+  }
+  for (BodyId id : touched) {
+    if (body(id).is_dynamic()) refresh_broad_phase(id, t);
+  }
+  for (std::uint32_t index : pairs.collect_rebounds(touched)) rebound(index, t);
+}
+
+std::vector<std::uint32_t> Simulation::Impl::split(std::uint32_t k, double t, bool& changed) {
+  std::vector<std::uint32_t> made;
+  changed = false;
+  Island& is = islands[k];
+  if (is.links.empty()) {
+    for (BodyId id : is.bodies) island_of[id.index] = -1;
+    release_slot(k);
+    return made;
+  }
+  // Union-find over the island's bodies.
+  std::vector<int> parent(is.bodies.size());
+  for (std::size_t n = 0; n < parent.size(); ++n) parent[n] = static_cast<int>(n);
+  auto find = [&](int x) {
+    while (parent[static_cast<std::size_t>(x)] != x) x = parent[static_cast<std::size_t>(x)];
+    return x;
+  };
+  std::vector<bool> linked(is.bodies.size(), false);
+  for (const HeldLink& link : is.links) {
+    const int m = is.index_of(link.mover), s = is.index_of(link.support);
+    if (m >= 0) linked[static_cast<std::size_t>(m)] = true;
+    if (s >= 0) linked[static_cast<std::size_t>(s)] = true;
+    if (m >= 0 && s >= 0) parent[static_cast<std::size_t>(find(m))] = find(s);
+  }
+  const int root = [&] {
+    const HeldLink& first = is.links.front();
+    const int m = is.index_of(first.mover);
+    return find(m >= 0 ? m : is.index_of(first.support));
+  }();
+  std::vector<BodyId> keep;
+  std::vector<std::pair<int, BodyId>> others;
+  for (std::size_t n = 0; n < is.bodies.size(); ++n) {
+    const BodyId id = is.bodies[n];
+    if (!linked[n]) {
+      island_of[id.index] = -1;
+      body(id).state = is.state_at(n, t);
+    } else if (find(static_cast<int>(n)) == root) {
+      keep.push_back(id);
+    } else {
+      others.emplace_back(find(static_cast<int>(n)), id);
+    }
+  }
+  if (others.empty() && keep.size() == is.bodies.size()) return made;
+  changed = true;
+  std::sort(others.begin(), others.end(), [](const auto& x, const auto& y) {
+    return x.first < y.first || (x.first == y.first && x.second < y.second);
+  });
+  std::vector<HeldLink> links = std::move(is.links);
+  for (BodyId id : is.bodies) commit(id, t);
+  is.bodies = keep;
+  is.links.clear();
+  std::map<int, std::uint32_t> slot_of;
+  for (const auto& [component, id] : others) {
+    auto it = slot_of.find(component);
+    if (it == slot_of.end()) {
+      const std::uint32_t slot = new_slot();
+      it = slot_of.emplace(component, slot).first;
+      made.push_back(slot);
+    }
+    islands[it->second].bodies.push_back(id);
+    island_of[id.index] = static_cast<int>(it->second);
+  }
+  Island& kept = islands[k];  // (new_slot may have moved the vector)
+  for (const HeldLink& link : links) {
+    const BodyId d = body(link.mover).is_dynamic() ? link.mover : link.support;
+    const int slot = island_of[d.index];
+    islands[static_cast<std::size_t>(slot)].links.push_back(link);
+  }
+  (void)kept;
+  return made;
+}
+
+void Simulation::Impl::schedule_island(std::uint32_t i, double t) {
+  if (!island_live[i]) return;
+  Island& is = islands[i];
+  if (is.motion == Island::Motion::kRest && !is.links.empty()) {
+    ++stats.rests;
+    const HeldLink& link = is.links.front();
+    report("rest", std::min(link.mover, link.support), std::max(link.mover, link.support),
+           body(is.bodies.front()).state.x_W, t);
+  }
+  if (!std::isfinite(is.t_end)) {
+    if (island_events[i] != EventQueue::kNoEvent) queue.erase(island_events[i]);
+    island_events[i] = EventQueue::kNoEvent;
+    return;
+  }
+  Event e;
+  e.t = std::max(is.t_end, t);
+  e.kind = EventKind::kIsland;
+  e.a = *std::min_element(is.bodies.begin(), is.bodies.end());
+  e.owner = i;
+  if (island_events[i] == EventQueue::kNoEvent) {
+    island_events[i] = queue.push(e);
+  } else {
+    queue.update(island_events[i], e);
+  }
+}
+
+void Simulation::Impl::island_event(std::uint32_t i, double t) {
+  island_events[i] = EventQueue::kNoEvent;
+  Island& is = islands[i];
+  for (BodyId id : is.bodies) commit(id, t);
+  ++stats.mode_changes;
+  const IslandEvent ev = is.event;
+  is.trigger = ev;
+  if (ev.link >= 0 && ev.link < static_cast<int>(is.links.size())) {
+    const HeldLink& link = is.links[static_cast<std::size_t>(ev.link)];
+    if (ev.kind != IslandEvent::Kind::kSegmentEnd) {
+      report(to_string(ev.kind), std::min(link.mover, link.support),
+             std::max(link.mover, link.support), body(link.mover).state.x_W, t);
+    }
+    if (ev.kind == IslandEvent::Kind::kLanding) {
+      // Another part of the body reaches the plane: a collision, which the pair's check finds.
+      pairs.pair(link.pair).held = false;
+      is.links.erase(is.links.begin() + ev.link);
+    }
+  }
+  // A motion that keeps ending where it began makes no progress: let its contacts go.
+  if (t <= is.last_event_t) {
+    if (++is.stalls > 50) {
+      ++stats.stalled_islands;
+      for (const HeldLink& link : is.links) pairs.pair(link.pair).held = false;
+      is.links.clear();
+    }
+  } else {
+    is.stalls = 0;
+  }
+  is.last_event_t = t;
+  replan(i, t);
+}
+
+}  // namespace palpable

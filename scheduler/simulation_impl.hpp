@@ -1,0 +1,203 @@
+#pragma once
+// The private state and operations of Simulation (scheduler/simulation.hpp), shared by the files
+// that implement it:
+//   simulation.cpp          the loop: the event queue, pairs and their bounds, samples
+//   simulation_collide.cpp  collisions: a pair's check, riders, the contact model's resolution
+//   simulation_hold.cpp     persistent contact: holding, islands, their events
+// State has one owner: the world (bodies and committed states), the queue, the pairs and the
+// statistics live here; the contact model (scheduler/contact.hpp) and the islands
+// (scheduler/island.hpp) see values only. Not installed; no other module includes it.
+#include "core/ballistic.hpp"
+#include "distance/toi_bound.hpp"
+#include "scheduler/contact.hpp"
+#include "scheduler/island.hpp"
+#include "scheduler/pair_set.hpp"
+#include "scheduler/simulation.hpp"
+
+#include <optional>
+#include <vector>
+
+namespace palpable {
+
+struct Simulation::Impl {
+  World world;
+  SimulationOptions options;
+  SimulationStats stats;
+  double now = 0.0;
+  EventQueue queue;
+  PairSet pairs;
+  std::uint64_t next_sample = 0;
+  SimulationObserver* observer = nullptr;  // of the step being processed
+
+  // Persistent contact (scheduler/island.hpp): islands of held bodies, in slots.
+  std::vector<Island> islands;
+  std::vector<EventQueue::EventId> island_events;  // per slot
+  std::vector<bool> island_live;                   // per slot
+  std::vector<std::uint32_t> free_islands;
+  std::vector<int> island_of;                    // per body: its island slot, or -1
+  std::vector<const ShapeGeometry*> geometries;  // per body
+
+  Impl(World w, SimulationOptions o)
+      : world(std::move(w)), options(o), queue(o.queue), pairs(world, queue, stats) {}
+
+  const Settings& settings() const { return world.settings; }
+  Body& body(BodyId id) { return world.bodies[id.index]; }
+  const Body& body(BodyId id) const { return world.bodies[id.index]; }
+
+  bool persistent() const { return settings().contact_model == ContactModel::kPersistent; }
+  const Island* island(BodyId id) const {
+    const int i = island_of.empty() ? -1 : island_of[id.index];
+    return i >= 0 ? &islands[static_cast<std::size_t>(i)] : nullptr;
+  }
+
+  BodyState extrapolate(BodyId id, double t) const {
+    const Body& b = body(id);
+    if (t <= b.state.t) return b.state;
+    if (const Island* is = island(id)) {
+      return is->state_at(static_cast<std::size_t>(is->index_of(id)), t);
+    }
+    return advance(b, b.state, t, world.gravity_W, settings());
+  }
+  void commit(BodyId id, double t) {
+    Body& b = body(id);
+    if (t > b.state.t) b.state = extrapolate(id, t);
+  }
+  // A held body's acceleration (its island's), or null for free flight.
+  const Vec3* held_acceleration(BodyId id) const {
+    const Island* is = island(id);
+    return is ? &is->acceleration(static_cast<std::size_t>(is->index_of(id))) : nullptr;
+  }
+  ContactSide side(BodyId id, const BodyState& s) const {
+    return ContactSide{id, body(id), pairs.geometry(id), s, held_acceleration(id)};
+  }
+
+  // ---------------------------------------------------------------- pairs and bounds
+
+  void refresh_broad_phase(BodyId id, double t);
+
+  // After a collision: the boxes and pairs of every dynamic body it moved (the pair's and the
+  // riders it carried), then every pair of those bodies re-bounded once. A fixed body's box never
+  // changes, and every dynamic body overlapping it was paired with it at that body's own last
+  // refresh, so refreshing a fixed body would change nothing - but cost a scan of every dynamic
+  // body for a halfspace, whose box is infinite: it is skipped. So for a kinematic body, whose
+  // box follows only time (its horizon event keeps it current).
+  void refresh_after_collision(const CollisionRecord& r, double t);
+
+  void schedule_pair(std::uint32_t index, double t_next);
+
+  // The least step a pair's next check may take at time t [s] (core/settings.hpp).
+  double progress_floor(double t) const { return derived_progress_floor(settings(), t); }
+
+  DistanceResult query(PairSet::Pair& p, const BodyState& s1, const BodyState& s2);
+
+  // Is piece result r of pair p held (a compound's piece on which a link of p rests)? A pair
+  // with a compound keeps its events for its other pieces (a ball held on the floor of a table
+  // still meets its cushions); a plain held pair has none.
+  bool held_piece(const PairSet::Pair& p, const DistanceResult& r) const;
+
+  // The piece-pair result a collision would be resolved at: `dr` itself, or, for a pair with a
+  // compound, the piece within the envelope approaching fastest (a ball in a crease touches two
+  // pieces; the closest may be the one it is leaving), else the closest piece; held pieces
+  // never.
+  const DistanceResult& contact_result(const PairSet::Pair& p, const BodyState& s1,
+                                       const BodyState& s2, const DistanceResult& dr) const;
+
+  // A pair whose held contact let go at this very instant, not truly approaching (its contact
+  // is only pressed by the gravity that no longer holds it: a ball leaving a table's edge).
+  static bool lifting(const PairSet::Pair& p, const Contact& c, double t);
+
+  // How a body moves over the coming interval, for a bound: free flight, or its island's motion.
+  ToiMotion motion_for(BodyId id, const BodyState& s, const BodyState& other,
+                       BodyId other_id) const;
+
+  // The conservative bound of a pair with a held body (never exact: no closed form follows a held
+  // body's motion).
+  ToiBound held_time_of_impact(const PairSet::Pair& p, const BodyState& s1, const BodyState& s2,
+                               const DistanceResult& dr) const;
+
+  // The next event time of a pair from its closest features at time t.
+  // `known`: the contact check_pair already made of this very query and found not approaching
+  // (saves making it again); null to make it here.
+  double next_check_time(const PairSet::Pair& p, const BodyState& s1, const BodyState& s2,
+                         const DistanceResult& dr, double t, const Contact* known = nullptr);
+
+  void rebound(std::uint32_t index, double t);
+
+  // ---------------------------------------------------------------- collisions
+
+  // The dynamic bodies riding on body `id` at time t: resting on it (within two envelopes, a
+  // microcollision bounces a body up to 1.5; the normal within 60 degrees of the vertical;
+  // at rest on it along the normal or settling onto it slower than the microcollision speed),
+  // and those riding on them, up to kMaxRiderDepth levels. Appended to `riders` (no repeats).
+  void collect_riders(BodyId id, double t, int depth, std::vector<BodyId>& riders);
+
+  // Resolves the collision of contact `c` (of pair `p`, states committed at t), commits the new
+  // velocities and returns the record.
+  CollisionRecord collide(const PairSet::Pair& p, Contact& c, double t,
+                          const ResolveOptions& options = ResolveOptions{});
+
+  // A pair's event: collide if within the envelope and approaching, else re-bound. Returns the
+  // collision, if any.
+  std::optional<CollisionRecord> check_pair(std::uint32_t index, double t);
+
+  // ---------------------------------------------------------------- persistent contact
+
+  void report(const char* kind, BodyId a, BodyId b, const Vec3& p_W, double t);
+
+  // Under the persistent contact model (DESIGN.md §8.1): the collision is integrated with the
+  // material's restitution and no rebound floor (plastic if it arrives slower than the
+  // microcollision speed: what would have started a microcollision train); if the contact then
+  // separates slower than the microcollision speed, it is held. A contact whose features offer no
+  // plane (two spheres, a sphere on an edge) cannot be held: it stays a microcollision train, as
+  // under Mirtich's model.
+  CollisionRecord collide_or_hold(std::uint32_t index, Contact& c, const DistanceResult& dr,
+                                  double t);
+
+  // The link that would hold pair `index`'s contact (closest features `dr`, states at t).
+  std::optional<HeldLink> link_of(std::uint32_t index, const DistanceResult& dr) const;
+
+  // A collision changed the velocities of these bodies: islands re-plan, free bodies re-bound.
+  void after_collision(const CollisionRecord& record, double t);
+
+  // Holds the contact of pair `index` (states committed at t): its link joins the island of its
+  // dynamic bodies.
+  void hold(std::uint32_t index, const HeldLink& link, const DistanceResult& dr, double t);
+
+  // The island holding all of `ids` (dynamic bodies): theirs merged, or a new one.
+  std::uint32_t join(const std::vector<BodyId>& ids, double t);
+
+  std::uint32_t new_slot();
+
+  void release_slot(std::uint32_t i);
+
+  // Plans island i's motion from time t (after a collision, a hold or one of its events), then
+  // splits it where its links no longer connect it, frees bodies held by nothing, queues its next
+  // event and refreshes its bodies' boxes and bounds.
+  void replan(std::uint32_t i, double t);
+
+  // Splits island k into the components its links connect; bodies no link holds leave it (free
+  // flight from their state at t). Returns the new islands (to be planned); island k keeps the
+  // component of its first link.
+  std::vector<std::uint32_t> split(std::uint32_t k, double t, bool& changed);
+
+  void schedule_island(std::uint32_t i, double t);
+
+  // Island i's motion reached its next event at time t: a mode change.
+  void island_event(std::uint32_t i, double t);
+
+  // ---------------------------------------------------------------- the loop
+
+  void schedule_sample();
+
+  void sample(double t, SimulationObserver* observer);
+
+  // Bodies may start touching (the racked pool balls sit inside each other's envelopes) but never
+  // overlapping, and only with finite states.
+  void validate_start();
+
+  void start();
+
+  StepResult step(double t_end, SimulationObserver* step_observer);
+};
+
+}  // namespace palpable
