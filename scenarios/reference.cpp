@@ -1,10 +1,15 @@
 #include "scenarios/reference.hpp"
 
 #include "core/check.hpp"
+#include "scenarios/json_reader.hpp"
 
 #include <Eigen/Dense>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
+#include <map>
+#include <set>
 
 namespace palpable {
 namespace {
@@ -13,53 +18,75 @@ using nlohmann::json;
 
 constexpr double kPi = 3.14159265358979323846;
 
+// The parameters of each reference type: kind ('n' number, 'd' direction, 'v' vector, 's' body
+// name, 'i' whole number) and whether required. Keys outside these are rejected.
+struct Parameter {
+  char kind;
+  bool required;
+};
+const std::map<std::string, std::map<std::string, Parameter>>& reference_parameters() {
+  static const std::map<std::string, std::map<std::string, Parameter>> table = {
+      {"incline",
+       {{"body", {'s', true}},
+        {"angle_deg", {'n', true}},
+        {"friction", {'n', true}},
+        {"gravity", {'n', true}},
+        {"initial_speed", {'n', false}},
+        {"down_slope", {'d', true}},
+        {"normal", {'d', true}}}},
+      {"turntable", {{"body", {'s', true}}, {"omega", {'n', true}}, {"axis", {'d', false}},
+                     {"k", {'n', false}}}},
+      {"slide_to_roll",
+       {{"body", {'s', true}},
+        {"friction", {'n', true}},
+        {"gravity", {'n', true}},
+        {"radius", {'n', true}},
+        {"k", {'n', false}},
+        {"normal", {'d', false}},
+        {"velocity", {'v', false}},
+        {"angular_velocity", {'v', false}}}},
+      {"bouncing_ball",
+       {{"body", {'s', true}},
+        {"restitution", {'n', true}},
+        {"gravity", {'n', true}},
+        {"radius", {'n', false}},
+        {"ground", {'n', false}},
+        {"normal", {'d', false}},
+        {"apexes", {'i', false}}}},
+      {"impact_1d",
+       {{"body_a", {'s', true}},
+        {"body_b", {'s', true}},
+        {"restitution", {'n', true}},
+        {"mass_a", {'n', true}},
+        {"mass_b", {'n', true}},
+        {"axis", {'d', false}}}},
+  };
+  return table;
+}
+
+// Reads one parameter of a validated spec (validate_reference has checked its kind).
 double spec_number(const json& spec, const std::string& where, const std::string& key) {
-  auto it = spec.find(key);
-  if (it == spec.end()) throw InputError(where + "/" + key, "missing reference parameter");
-  if (!it->is_number() || !std::isfinite(it->get<double>())) {
-    throw InputError(where + "/" + key, "got " + it->dump() + ", expected a finite number");
-  }
-  return it->get<double>();
+  return JsonReader(where, "").number(JsonReader(where, "").required(spec, "", key), "/" + key);
 }
 
 Vec3 spec_vec3(const json& spec, const std::string& where, const std::string& key) {
-  auto it = spec.find(key);
-  if (it == spec.end()) throw InputError(where + "/" + key, "missing reference parameter");
-  if (!it->is_array() || it->size() != 3 || !(*it)[0].is_number() || !(*it)[1].is_number() ||
-      !(*it)[2].is_number()) {
-    throw InputError(where + "/" + key, "got " + it->dump() + ", expected [x, y, z]");
-  }
-  Vec3 v((*it)[0].get<double>(), (*it)[1].get<double>(), (*it)[2].get<double>());
-  if (!(v.norm() > 0.0)) throw InputError(where + "/" + key, "expected a non-zero vector");
-  return v.normalized();
+  return JsonReader(where, "").direction(JsonReader(where, "").required(spec, "", key), "/" + key);
 }
 
 // A vector parameter, any length (a velocity).
 Vec3 spec_vector(const json& spec, const std::string& where, const std::string& key) {
-  const json& v = spec.at(key);
-  if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() ||
-      !v[2].is_number()) {
-    throw InputError(where + "/" + key, "got " + v.dump() + ", expected [x, y, z]");
-  }
-  return Vec3(v[0].get<double>(), v[1].get<double>(), v[2].get<double>());
+  return JsonReader(where, "").vec3(JsonReader(where, "").required(spec, "", key), "/" + key);
 }
 
 std::string spec_string(const json& spec, const std::string& where, const std::string& key) {
-  auto it = spec.find(key);
-  if (it == spec.end() || !it->is_string()) {
-    throw InputError(where + "/" + key, "expected a string");
-  }
-  return it->get<std::string>();
+  return JsonReader(where, "").string(JsonReader(where, "").required(spec, "", key), "/" + key);
 }
 
 json compare_incline(const json& spec, const Trace& trace, const std::string& where) {
   std::size_t body = trace.body_index(spec_string(spec, where, "body"), where + "/body");
-  const double theta = spec_number(spec, where, "angle_deg") * kPi / 180.0;
-  const double mu = spec_number(spec, where, "friction");
-  const double g = spec_number(spec, where, "gravity");
-  const double v0 =
-      spec.contains("initial_speed") ? spec_number(spec, where, "initial_speed") : 0.0;
-  const Vec3 down = spec_vec3(spec, where, "down_slope");
+  const InclineMotion motion = incline_motion(spec, where);
+  const double v0 = motion.initial_speed;
+  const Vec3 down = motion.down_slope;
   const Vec3 normal = spec_vec3(spec, where, "normal");
   const Vec3 across = normal.cross(down).normalized();
 
@@ -75,7 +102,7 @@ json compare_incline(const json& spec, const Trace& trace, const std::string& wh
   double cross_max = 0.0;
   for (double x : c) cross_max = std::max(cross_max, std::abs(x));
 
-  const double a = g * (std::sin(theta) - mu * std::cos(theta));  // along-slope while sliding
+  const double a = motion.sliding_acceleration;
   json figures;
   figures["acceleration_closed_form"] = a;
   figures["cross_slope_max_m"] = cross_max;
@@ -164,18 +191,14 @@ json compare_incline(const json& spec, const Trace& trace, const std::string& wh
 
 json compare_turntable(const json& spec, const Trace& trace, const std::string& where) {
   std::size_t body = trace.body_index(spec_string(spec, where, "body"), where + "/body");
-  const double omega = spec_number(spec, where, "omega");
-  const Vec3 axis = spec.contains("axis") ? spec_vec3(spec, where, "axis") : Vec3::UnitZ();
-  const double k = spec.contains("k") ? spec_number(spec, where, "k") : 0.4;
-  if (!(k > 0.0)) throw InputError(where + "/k", "expected k > 0 (I = k m r^2)");
-  const double rate = k / (1.0 + k) * omega;  // dv/dt = rate * axis x v
   std::vector<BodyState> states = trace.series(body);
   const Vec3 x0 = states.front().x_W;
-  const Vec3 v0 = states.front().v_W - axis * axis.dot(states.front().v_W);
+  const TurntableCircle circle = turntable_circle(spec, where, x0, states.front().v_W);
+  const Vec3 axis = circle.axis;
+  const double rate = circle.rate;  // dv/dt = rate * axis x v
+  const Vec3 centre = circle.centre;
+  const double radius = circle.radius;
   const double t0 = trace.times.front();
-  // Circle centre: x0 + axis x v0 / rate; radius |v0| / rate.
-  const Vec3 centre = x0 + axis.cross(v0) / rate;
-  const double radius = v0.norm() / rate;
 
   double circle_dev = 0.0, path_dev = 0.0;
   std::vector<double> t, angle;
@@ -460,6 +483,21 @@ json compare_impact_1d(const json& spec, const Trace& trace, const std::string& 
   return figures;
 }
 
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// A numeric figure, NaN if absent.
+double figure(const json& figures, const std::string& key) {
+  auto it = figures.find(key);
+  if (it == figures.end() || !it->is_number()) return kNaN;
+  return it->get<double>();
+}
+
+// max(|a|, |b|), NaN if either is NaN (a figure the error needs is missing).
+double worst(double a, double b) {
+  if (std::isnan(a) || std::isnan(b)) return kNaN;
+  return std::max(std::abs(a), std::abs(b));
+}
+
 }  // namespace
 
 std::vector<double> polynomial_fit(const std::vector<double>& t, const std::vector<double>& y,
@@ -499,9 +537,126 @@ std::vector<double> polynomial_fit(const std::vector<double>& t, const std::vect
   return out;
 }
 
+double InclineMotion::distance(double t) const {
+  const double tc = std::min(t, stop_time);
+  return initial_speed * tc + 0.5 * acceleration * tc * tc;
+}
+
+double InclineMotion::speed(double t) const {
+  return t < stop_time ? initial_speed + acceleration * t : 0.0;
+}
+
+InclineMotion incline_motion(const json& spec, const std::string& where) {
+  const double theta = spec_number(spec, where, "angle_deg") * kPi / 180.0;
+  const double mu = spec_number(spec, where, "friction");
+  const double g = spec_number(spec, where, "gravity");
+  InclineMotion m;
+  m.initial_speed = spec.contains("initial_speed") ? spec_number(spec, where, "initial_speed") : 0.0;
+  m.down_slope = spec_vec3(spec, where, "down_slope");
+  m.sliding_acceleration = g * (std::sin(theta) - mu * std::cos(theta));
+  m.acceleration = m.sliding_acceleration <= 0.0 && m.initial_speed <= 0.0 ? 0.0
+                                                                            : m.sliding_acceleration;
+  m.stop_time = m.acceleration < 0.0 && m.initial_speed > 0.0 ? m.initial_speed / -m.acceleration
+                                                              : kInfinity;
+  return m;
+}
+
+TurntableCircle turntable_circle(const json& spec, const std::string& where, const Vec3& x0,
+                                 const Vec3& v0_W) {
+  TurntableCircle c;
+  const double omega = spec_number(spec, where, "omega");
+  c.axis = spec.contains("axis") ? spec_vec3(spec, where, "axis") : Vec3::UnitZ();
+  const double k = spec.contains("k") ? spec_number(spec, where, "k") : 0.4;
+  if (!(k > 0.0)) throw InputError(where + "/k", "expected k > 0 (I = k m r^2)");
+  if (omega == 0.0) throw InputError(where + "/omega", "expected a non-zero rate");
+  c.rate = k / (1.0 + k) * omega;
+  const Vec3 v0 = v0_W - c.axis * c.axis.dot(v0_W);
+  c.centre = x0 + c.axis.cross(v0) / c.rate;
+  c.radius = v0.norm() / c.rate;
+  return c;
+}
+
+double primary_error(const json& reference) {
+  if (!reference.is_object()) return kNaN;
+  const std::string type = reference.value("reference", std::string());
+  if (type == "incline") {
+    const std::string mode = reference.value("mode", std::string());
+    if (mode == "slide_then_stop") {
+      const double t_error =
+          figure(reference, "stop_time_error_s") / figure(reference, "stop_time_closed_form_s");
+      const double creep =
+          figure(reference, "creep_m") / figure(reference, "stop_distance_closed_form_m");
+      return worst(t_error, creep);
+    }
+    if (mode == "accelerating") return std::abs(figure(reference, "acceleration_rel_error"));
+    if (mode == "stick") return figure(reference, "creep_m");
+    return kNaN;
+  }
+  if (type == "turntable") {
+    return worst(
+        figure(reference, "rate_rel_error"),
+        figure(reference, "circle_deviation_max_m") / figure(reference, "radius_closed_form_m"));
+  }
+  if (type == "slide_to_roll") {
+    return worst(
+        figure(reference, "roll_time_error_s") / figure(reference, "roll_time_closed_form_s"),
+        figure(reference, "final_speed_rel_error"));
+  }
+  if (type == "bouncing_ball") return std::abs(figure(reference, "apex_height_rel_error_max"));
+  if (type == "impact_1d") {
+    return worst(figure(reference, "velocity_a_rel_error"),
+                 figure(reference, "velocity_b_rel_error"));
+  }
+  return kNaN;
+}
+
+void validate_reference(const json& spec, const std::string& where,
+                        const std::vector<std::string>& body_names) {
+  const JsonReader r(where, "");
+  if (!spec.is_object()) r.fail_value("", spec, "a reference object with a \"type\"");
+  const std::string type = r.string(r.required(spec, "", "type"), "/type");
+  const auto& table = reference_parameters();
+  auto it = table.find(type);
+  if (it == table.end()) {
+    std::string names;
+    for (const auto& [name, parameters] : table) names += (names.empty() ? "\"" : ", \"") + name + "\"";
+    r.fail_value("/type", spec["type"], "one of " + names);
+  }
+  std::set<std::string> keys{"type"};
+  for (const auto& [key, parameter] : it->second) keys.insert(key);
+  r.only_keys(spec, "", keys);
+  for (const auto& [key, parameter] : it->second) {
+    auto value = spec.find(key);
+    if (value == spec.end()) {
+      if (parameter.required) r.fail("/" + key, "missing reference parameter");
+      continue;
+    }
+    const std::string path = "/" + key;
+    switch (parameter.kind) {
+      case 'n': r.number(*value, path); break;
+      case 'd': r.direction(*value, path); break;
+      case 'v': r.vec3(*value, path); break;
+      case 'i':
+        if (!value->is_number_integer() || value->get<long long>() < 1 ||
+            value->get<long long>() > 1000) {
+          r.fail_value(path, *value, "a whole number from 1 to 1000");
+        }
+        break;
+      case 's': {
+        const std::string name = r.string(*value, path);
+        if (!body_names.empty() &&
+            std::find(body_names.begin(), body_names.end(), name) == body_names.end()) {
+          r.fail_value(path, *value, "the name of a body of the scene");
+        }
+        break;
+      }
+    }
+  }
+}
+
 json compare_with_reference(const json& spec, const Trace& trace, const std::string& where) {
-  if (!spec.is_object()) throw InputError(where, "expected a reference object with a \"type\"");
-  std::string type = spec_string(spec, where, "type");
+  validate_reference(spec, where, trace.body_names);
+  const std::string type = spec["type"].get<std::string>();
   json figures;
   if (type == "incline") {
     figures = compare_incline(spec, trace, where);
@@ -511,15 +666,12 @@ json compare_with_reference(const json& spec, const Trace& trace, const std::str
     figures = compare_slide_to_roll(spec, trace, where);
   } else if (type == "bouncing_ball") {
     figures = compare_bouncing_ball(spec, trace, where);
-  } else if (type == "impact_1d") {
-    figures = compare_impact_1d(spec, trace, where);
   } else {
-    throw InputError(where + "/type", "got \"" + type +
-                                          "\", expected one of \"incline\", \"turntable\", "
-                                          "\"slide_to_roll\", \"bouncing_ball\", \"impact_1d\"");
+    figures = compare_impact_1d(spec, trace, where);
   }
   figures["reference"] = type;
   return figures;
 }
+
 
 }  // namespace palpable

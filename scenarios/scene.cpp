@@ -1,5 +1,8 @@
 #include "scenarios/scene.hpp"
 
+#include "scenarios/json_reader.hpp"
+#include "scenarios/reference.hpp"
+
 #include "core/check.hpp"
 #include "core/mass_properties.hpp"
 #include "core/shape.hpp"
@@ -16,96 +19,7 @@ namespace {
 
 using nlohmann::json;
 
-std::string describe(const json& value) {
-  std::string text = value.dump();
-  if (text.size() > 60) text = text.substr(0, 57) + "...";
-  return text;
-}
-
-// Walks a scene document keeping the JSON pointer of every value it reads, so that each error
-// names its path, the value found and what was expected.
-class Reader {
- public:
-  explicit Reader(std::string source) : source_(std::move(source)) {}
-
-  // True for an error this reader raised (it already names the JSON path).
-  bool is_ours(const InputError& e) const { return e.where().rfind(source_ + ":", 0) == 0; }
-
-  [[noreturn]] void fail(const std::string& path, const std::string& message) const {
-    throw InputError(source_ + ":" + (path.empty() ? "/" : path), message);
-  }
-  [[noreturn]] void fail_value(const std::string& path, const json& value,
-                               const std::string& expected) const {
-    fail(path, "got " + describe(value) + ", expected " + expected);
-  }
-
-  const json& object(const json& value, const std::string& path) const {
-    if (!value.is_object()) fail_value(path, value, "an object");
-    return value;
-  }
-
-  // Rejects keys not in `allowed` (typos would otherwise be silently ignored).
-  void only_keys(const json& obj, const std::string& path, std::set<std::string> allowed) const {
-    for (auto it = obj.begin(); it != obj.end(); ++it) {
-      if (!allowed.count(it.key())) {
-        std::string list;
-        for (const auto& k : allowed) list += (list.empty() ? "" : ", ") + k;
-        fail(path + "/" + it.key(), "unknown key; expected one of: " + list);
-      }
-    }
-  }
-
-  const json& required(const json& obj, const std::string& path, const std::string& key) const {
-    auto it = obj.find(key);
-    if (it == obj.end()) fail(path + "/" + key, "missing required key");
-    return *it;
-  }
-
-  double number(const json& value, const std::string& path) const {
-    if (!value.is_number()) fail_value(path, value, "a number");
-    double x = value.get<double>();
-    if (!std::isfinite(x)) fail_value(path, value, "a finite number");
-    return x;
-  }
-  double positive(const json& value, const std::string& path) const {
-    double x = number(value, path);
-    if (!(x > 0.0)) fail_value(path, value, "a positive number");
-    return x;
-  }
-  double non_negative(const json& value, const std::string& path) const {
-    double x = number(value, path);
-    if (!(x >= 0.0)) fail_value(path, value, "a number >= 0");
-    return x;
-  }
-  std::string string(const json& value, const std::string& path) const {
-    if (!value.is_string()) fail_value(path, value, "a string");
-    return value.get<std::string>();
-  }
-  Vec3 vec3(const json& value, const std::string& path) const {
-    if (!value.is_array() || value.size() != 3) fail_value(path, value, "an array of 3 numbers");
-    return Vec3(number(value[0], path + "/0"), number(value[1], path + "/1"),
-                number(value[2], path + "/2"));
-  }
-  Quat quaternion(const json& value, const std::string& path) const {
-    if (!value.is_array() || value.size() != 4) {
-      fail_value(path, value, "a unit quaternion [w, x, y, z]");
-    }
-    Quat q(number(value[0], path + "/0"), number(value[1], path + "/1"),
-           number(value[2], path + "/2"), number(value[3], path + "/3"));
-    // Accept rounding in hand-written or generated files; reject anything that is not meant to
-    // be a unit quaternion.
-    if (std::abs(q.norm() - 1.0) > 1e-6) {
-      fail_value(path, value,
-                 "a unit quaternion [w, x, y, z] (norm within 1e-6 of 1; this has norm " +
-                     std::to_string(q.norm()) + ")");
-    }
-    q.normalize();
-    return q;
-  }
-
- private:
-  std::string source_;
-};
+using Reader = JsonReader;
 
 std::shared_ptr<const Shape> parse_shape(const Reader& r, const json& value,
                                          const std::string& path, bool allow_unbounded) {
@@ -420,7 +334,13 @@ Scene scene_from_json(const json& doc, const std::string& source) {
       }
     }
   }
-  if (doc.contains("reference")) scene.reference = r.object(doc["reference"], "/reference");
+  if (doc.contains("reference")) {
+    // Checked whole before anything runs: a bad reference must not cost a run.
+    std::vector<std::string> names;
+    for (const Body& b : scene.world.bodies) names.push_back(b.name);
+    validate_reference(doc["reference"], source + ":/reference", names);
+    scene.reference = doc["reference"];
+  }
   return scene;
 }
 

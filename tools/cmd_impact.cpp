@@ -28,7 +28,7 @@ palpable::tools::CommandRegistration registration{
     "impact", [](CLI::App& app) {
       app.description(
           "Resolve one collision (integration over the normal impulse with Coulomb friction, "
-          "DESIGN.md section 4) and print the result as JSON");
+          "README \"How it works\") and print the result as JSON");
       app.footer(palpable::tools::kImpactSpecHelp);
       auto path = std::make_shared<std::string>();
       app.add_option("spec", *path, "JSON spec file, or - for standard input")->required();

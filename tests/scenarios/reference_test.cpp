@@ -301,7 +301,21 @@ TEST_CASE("bad reference specs name the parameter", "[scenarios][reference]") {
       Catch::Contains("r/omega"));
   CHECK_THROWS_WITH(palpable::compare_with_reference(
                         json{{"type", "turntable"}, {"body", "cube"}, {"omega", 1.0}}, trace, "r"),
-                    Catch::Contains("no body \"cube\""));
+                    Catch::Contains("r/body: got \"cube\", expected the name of a body"));
+  // Unknown keys are rejected (a misspelt parameter would otherwise be silently ignored).
+  CHECK_THROWS_WITH(palpable::compare_with_reference(
+                        json{{"type", "turntable"}, {"body", "ball"}, {"omega", 1.0}, {"kk", 1}},
+                        trace, "r"),
+                    Catch::Contains("r/kk: unknown key"));
+  // A reference is checked whole before a run: kinds and body names, no trace needed.
+  CHECK_THROWS_WITH(palpable::validate_reference(
+                        json{{"type", "turntable"}, {"body", "ball"}, {"omega", "fast"}}, "s.json:/reference", {"ball"}),
+                    Catch::Contains("s.json:/reference/omega: got \"fast\", expected a number"));
+  CHECK_THROWS_WITH(palpable::validate_reference(
+                        json{{"type", "turntable"}, {"body", "bal"}, {"omega", 1.0}}, "s.json:/reference", {"ball"}),
+                    Catch::Contains("s.json:/reference/body"));
+  CHECK_NOTHROW(palpable::validate_reference(
+      json{{"type", "turntable"}, {"body", "ball"}, {"omega", 1.0}}, "s.json:/reference", {"ball"}));
   CHECK_THROWS_WITH(palpable::compare_with_reference(json{{"type", "pendulum"}}, trace, "r"),
                     Catch::Contains("r/type"));
   CHECK_THROWS_WITH(palpable::compare_with_reference(json{{"type", "slide_to_roll"},
@@ -325,4 +339,36 @@ TEST_CASE("bad reference specs name the parameter", "[scenarios][reference]") {
                                                           {"mass_b", 1.0}},
                                                      trace, "r"),
                     Catch::Contains("r/body_b"));
+}
+
+TEST_CASE("the primary error of each reference type", "[scenarios][reference]") {
+  using palpable::primary_error;
+  CHECK(primary_error(json{{"reference", "incline"},
+                           {"mode", "slide_then_stop"},
+                           {"stop_time_error_s", -2e-3},
+                           {"stop_time_closed_form_s", 2.0},
+                           {"creep_m", 4e-3},
+                           {"stop_distance_closed_form_m", 2.0}}) == Approx(2e-3));
+  CHECK(primary_error(json{{"reference", "incline"},
+                           {"mode", "accelerating"},
+                           {"acceleration_rel_error", -3e-5}}) == Approx(3e-5));
+  CHECK(primary_error(json{{"reference", "turntable"},
+                           {"rate_rel_error", 1e-4},
+                           {"circle_deviation_max_m", 1e-3},
+                           {"radius_closed_form_m", 0.5}}) == Approx(2e-3));
+  CHECK(primary_error(json{{"reference", "slide_to_roll"},
+                           {"roll_time_error_s", 1e-3},
+                           {"roll_time_closed_form_s", 0.25},
+                           {"final_speed_rel_error", -1e-3}}) == Approx(4e-3));
+  CHECK(primary_error(json{{"reference", "bouncing_ball"}, {"apex_height_rel_error_max", -0.1}}) ==
+        Approx(0.1));
+  CHECK(primary_error(json{{"reference", "impact_1d"},
+                           {"velocity_a_rel_error", 1e-9},
+                           {"velocity_b_rel_error", -2e-9}}) == Approx(2e-9));
+  // A figure the error needs is missing (the block never stopped): not a number.
+  CHECK(std::isnan(primary_error(json{{"reference", "incline"},
+                                      {"mode", "slide_then_stop"},
+                                      {"creep_m", 0.0},
+                                      {"stop_distance_closed_form_m", 2.0}})));
+  CHECK(std::isnan(primary_error(json())));
 }

@@ -51,7 +51,8 @@ TEST_CASE("plot: every kind writes a PNG", "[tools][plot]") {
   write_incline_trace(trace);
   const std::string incline_params[] = {
       "body=block",   "angle_deg=30",      "friction=0.3",
-      "gravity=9.81", "initial_speed=0.0", "down_slope=[0.8660254037844386,0,-0.5]"};
+      "gravity=9.81", "initial_speed=0.0", "down_slope=[0.8660254037844386,0,-0.5]",
+      "normal=[0.5,0,0.8660254037844386]"};
   struct Case {
     PlotKind kind;
     std::string name;

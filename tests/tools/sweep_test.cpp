@@ -322,38 +322,6 @@ TEST_CASE("a run's numerical trouble shows in its row", "[tools][sweep]") {
   CHECK(table.rows[1][trouble] == "0");
 }
 
-TEST_CASE("the primary error of each reference type", "[tools][sweep]") {
-  using palpable::tools::primary_error;
-  CHECK(primary_error(json{{"reference", "incline"},
-                           {"mode", "slide_then_stop"},
-                           {"stop_time_error_s", -2e-3},
-                           {"stop_time_closed_form_s", 2.0},
-                           {"creep_m", 4e-3},
-                           {"stop_distance_closed_form_m", 2.0}}) == Approx(2e-3));
-  CHECK(primary_error(json{{"reference", "incline"},
-                           {"mode", "accelerating"},
-                           {"acceleration_rel_error", -3e-5}}) == Approx(3e-5));
-  CHECK(primary_error(json{{"reference", "turntable"},
-                           {"rate_rel_error", 1e-4},
-                           {"circle_deviation_max_m", 1e-3},
-                           {"radius_closed_form_m", 0.5}}) == Approx(2e-3));
-  CHECK(primary_error(json{{"reference", "slide_to_roll"},
-                           {"roll_time_error_s", 1e-3},
-                           {"roll_time_closed_form_s", 0.25},
-                           {"final_speed_rel_error", -1e-3}}) == Approx(4e-3));
-  CHECK(primary_error(json{{"reference", "bouncing_ball"}, {"apex_height_rel_error_max", -0.1}}) ==
-        Approx(0.1));
-  CHECK(primary_error(json{{"reference", "impact_1d"},
-                           {"velocity_a_rel_error", 1e-9},
-                           {"velocity_b_rel_error", -2e-9}}) == Approx(2e-9));
-  // A figure the error needs is missing (the block never stopped): not a number.
-  CHECK(std::isnan(primary_error(json{{"reference", "incline"},
-                                      {"mode", "slide_then_stop"},
-                                      {"creep_m", 0.0},
-                                      {"stop_distance_closed_form_m", 2.0}})));
-  CHECK(std::isnan(primary_error(json())));
-}
-
 TEST_CASE("the Pareto front and its plot", "[tools][sweep][plot]") {
   using palpable::tools::ParetoPoint;
   const std::vector<ParetoPoint> points{{1.0, 1e-2, "a"},         {2.0, 1e-3, "b"},

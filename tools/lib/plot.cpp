@@ -1,5 +1,7 @@
 #include "tools/lib/plot.hpp"
 
+#include "scenarios/reference.hpp"
+
 #include "core/check.hpp"
 
 #include <Eigen/Geometry>
@@ -61,27 +63,6 @@ std::string quoted(const std::string& text) {
     if (c == '\'') out += '\'';
   }
   return out + "'";
-}
-
-double number(const json& spec, const std::string& key, double fallback) {
-  auto it = spec.find(key);
-  if (it == spec.end()) return fallback;
-  if (!it->is_number()) {
-    throw InputError("--param " + key, "got " + it->dump() + ", expected a number");
-  }
-  return it->get<double>();
-}
-
-Vec3 vector3(const json& spec, const std::string& key, const Vec3& fallback) {
-  auto it = spec.find(key);
-  if (it == spec.end()) return fallback;
-  if (!it->is_array() || it->size() != 3 || !(*it)[0].is_number() || !(*it)[1].is_number() ||
-      !(*it)[2].is_number()) {
-    throw InputError("--param " + key, "got " + it->dump() + ", expected [x, y, z]");
-  }
-  Vec3 v((*it)[0].get<double>(), (*it)[1].get<double>(), (*it)[2].get<double>());
-  if (!(v.norm() > 0.0)) throw InputError("--param " + key, "expected a non-zero vector");
-  return v.normalized();
 }
 
 std::string body_of(const json& spec) {
@@ -185,27 +166,21 @@ std::string top_plot(const Trace& trace, const fs::path& dir) {
 // stopping at t* = v0 / (-a) when decelerating, at rest throughout when it sticks.
 std::string incline_plot(const Trace& trace, const json& spec, const fs::path& dir) {
   const std::size_t body = trace.body_index(body_of(spec), "--param body");
-  const double theta = number(spec, "angle_deg", std::nan("")) * kPi / 180.0;
-  const double mu = number(spec, "friction", std::nan(""));
-  const double g = number(spec, "gravity", std::nan(""));
-  const double v0 = number(spec, "initial_speed", 0.0);
-  if (!std::isfinite(theta)) throw InputError("--param angle_deg", "expected a number");
-  if (!std::isfinite(mu)) throw InputError("--param friction", "expected a number");
-  if (!std::isfinite(g)) throw InputError("--param gravity", "expected a number");
-  const Vec3 down = vector3(spec, "down_slope", Vec3::Constant(std::nan("")));
-  if (!down.allFinite()) throw InputError("--param down_slope", "expected [x, y, z]");
-  double a = g * (std::sin(theta) - mu * std::cos(theta));
-  if (a <= 0.0 && v0 <= 0.0) a = 0.0;  // sticks
-  const double t_stop = a < 0.0 && v0 > 0.0 ? v0 / -a : std::numeric_limits<double>::infinity();
+  const InclineMotion motion = incline_motion(spec, "--param");
+  const double theta = spec["angle_deg"].get<double>() * kPi / 180.0;
+  const double mu = spec["friction"].get<double>();
+  const double v0 = motion.initial_speed;
+  const double a = motion.acceleration;
+  const double t_stop = motion.stop_time;
+  const Vec3 down = motion.down_slope;
   const double t0 = trace.times.front();
   const Vec3 x0 = trace.samples.front()[body].x_W;
   std::ofstream data(dir / "data.dat");
   for (std::size_t k = 0; k < trace.times.size(); ++k) {
     const double t = trace.times[k] - t0;
     const BodyState& s = trace.samples[k][body];
-    const double tc = std::min(t, t_stop);
-    for (double v : {trace.times[k], (s.x_W - x0).dot(down), s.v_W.dot(down),
-                     v0 * tc + 0.5 * a * tc * tc, t < t_stop ? v0 + a * t : 0.0}) {
+    for (double v : {trace.times[k], (s.x_W - x0).dot(down), s.v_W.dot(down), motion.distance(t),
+                     motion.speed(t)}) {
       put(data, v);
       data << ' ';
     }
@@ -237,21 +212,15 @@ std::string incline_plot(const Trace& trace, const json& spec, const fs::path& d
 // x0 + axis × v0 / rate (DESIGN.md §6), in the plane of the platter (axis z).
 std::string turntable_plot(const Trace& trace, const json& spec, const fs::path& dir) {
   const std::size_t body = trace.body_index(body_of(spec), "--param body");
-  const double omega = number(spec, "omega", std::nan(""));
-  if (!std::isfinite(omega) || omega == 0.0) {
-    throw InputError("--param omega", "expected a non-zero number");
-  }
-  const double k = number(spec, "k", 0.4);
-  if (!(k > 0.0)) throw InputError("--param k", "expected k > 0");
-  const Vec3 axis = vector3(spec, "axis", Vec3::UnitZ());
-  if (std::abs(axis.z()) < 1.0 - 1e-12) {
+  const BodyState& first = trace.samples.front()[body];
+  const TurntableCircle circle = turntable_circle(spec, "--param", first.x_W, first.v_W);
+  if (std::abs(circle.axis.z()) < 1.0 - 1e-12) {
     throw InputError("--param axis", "the turntable plot is a top view: expected axis [0, 0, ±1]");
   }
-  const double rate = k / (1.0 + k) * omega;
-  const BodyState& first = trace.samples.front()[body];
-  const Vec3 v0 = first.v_W - axis * axis.dot(first.v_W);
-  const Vec3 centre = first.x_W + axis.cross(v0) / rate;
-  const double radius = v0.norm() / rate;
+  const double omega = spec["omega"].get<double>();
+  const double rate = circle.rate;
+  const Vec3 centre = circle.centre;
+  const double radius = circle.radius;
   std::ofstream data(dir / "data.dat");
   for (std::size_t i = 0; i < trace.times.size(); ++i) {
     put(data, trace.samples[i][body].x_W.x());
@@ -378,6 +347,9 @@ void plot_trace(const PlotOptions& options) {
       throw InputError("--reference", "got " + spec["type"].dump() + ", expected \"" + expected +
                                           "\" for --kind " + expected);
     }
+    validate_reference(spec, options.reference.scene_path.empty()
+                                 ? std::string("--param")
+                                 : options.reference.scene_path + ":/reference");
   }
   Trace trace = read_trace_csv(options.trace_path);
   const std::string program = require_gnuplot(options.gnuplot);

@@ -1,5 +1,7 @@
 #include "tools/lib/sweep.hpp"
 
+#include "scenarios/reference.hpp"
+
 #include "core/check.hpp"
 #include "scenarios/scene.hpp"
 #include "tools/lib/median.hpp"
@@ -81,18 +83,6 @@ void flatten(const std::string& name, const json& value, std::map<std::string, s
   } else {
     (*out)[name] = cell_text(value);
   }
-}
-
-double figure(const json& reference, const std::string& key) {
-  auto it = reference.find(key);
-  if (it == reference.end() || !it->is_number()) return kNaN;
-  return it->get<double>();
-}
-
-// max(|a|, |b|), NaN if either is NaN (a figure the error needs is missing).
-double worst(double a, double b) {
-  if (std::isnan(a) || std::isnan(b)) return kNaN;
-  return std::max(std::abs(a), std::abs(b));
 }
 
 // One combination's measurement, as JSON so that a forked worker can send it through a pipe and
@@ -455,40 +445,6 @@ std::string sweep_fingerprint(const SweepOptions& options) {
   char hex[17];
   std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(hash));
   return hex;
-}
-
-double primary_error(const json& reference) {
-  if (!reference.is_object()) return kNaN;
-  const std::string type = reference.value("reference", std::string());
-  if (type == "incline") {
-    const std::string mode = reference.value("mode", std::string());
-    if (mode == "slide_then_stop") {
-      const double t_error =
-          figure(reference, "stop_time_error_s") / figure(reference, "stop_time_closed_form_s");
-      const double creep =
-          figure(reference, "creep_m") / figure(reference, "stop_distance_closed_form_m");
-      return worst(t_error, creep);
-    }
-    if (mode == "accelerating") return std::abs(figure(reference, "acceleration_rel_error"));
-    if (mode == "stick") return figure(reference, "creep_m");
-    return kNaN;
-  }
-  if (type == "turntable") {
-    return worst(
-        figure(reference, "rate_rel_error"),
-        figure(reference, "circle_deviation_max_m") / figure(reference, "radius_closed_form_m"));
-  }
-  if (type == "slide_to_roll") {
-    return worst(
-        figure(reference, "roll_time_error_s") / figure(reference, "roll_time_closed_form_s"),
-        figure(reference, "final_speed_rel_error"));
-  }
-  if (type == "bouncing_ball") return std::abs(figure(reference, "apex_height_rel_error_max"));
-  if (type == "impact_1d") {
-    return worst(figure(reference, "velocity_a_rel_error"),
-                 figure(reference, "velocity_b_rel_error"));
-  }
-  return kNaN;
 }
 
 SweepTable run_sweep(const SweepOptions& options) {

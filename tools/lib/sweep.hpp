@@ -54,17 +54,7 @@ std::size_t combination_count(const std::vector<SweepParameter>& parameters);
 std::vector<std::size_t> combination_digits(const std::vector<SweepParameter>& parameters,
                                             std::size_t index);
 
-// The scene's primary relative error from its reference figures (scenarios/README.md):
-//   incline, slide_then_stop: max(|stop time error| / t*, creep / stop distance)
-//   incline, accelerating:    |acceleration relative error|
-//   incline, stick:           creep [m] (no scale to divide by)
-//   turntable:                max(|orbit rate relative error|, circle deviation / radius)
-//   slide_to_roll:            max(|roll time error| / t_roll, |final speed relative error|)
-//   bouncing_ball:            |apex height relative error|, largest over the apexes
-//   impact_1d:                max(|velocity error| of both bodies) / approach speed
-// NaN when the figures it needs are missing (the run did not show the motion the reference
-// describes, e.g. it never stopped) or the scene has no reference.
-double primary_error(const nlohmann::json& reference);
+
 
 // The table a sweep writes: a header and rows of CSV cells (text as written).
 struct SweepTable {

@@ -1,0 +1,113 @@
+#include "scenarios/json_reader.hpp"
+
+#include "core/check.hpp"
+
+#include <cmath>
+
+namespace palpable {
+
+using nlohmann::json;
+
+std::string describe_json(const json& value) {
+  std::string text = value.dump();
+  if (text.size() > 60) text = text.substr(0, 57) + "...";
+  return text;
+}
+
+bool JsonReader::is_ours(const InputError& e) const {
+  return e.where().rfind(source_ + separator_, 0) == 0;
+}
+
+void JsonReader::fail(const std::string& path, const std::string& message) const {
+  throw InputError(source_ + separator_ + (path.empty() ? "/" : path), message);
+}
+
+void JsonReader::fail_value(const std::string& path, const json& value,
+                            const std::string& expected) const {
+  fail(path, "got " + describe_json(value) + ", expected " + expected);
+}
+
+const json& JsonReader::object(const json& value, const std::string& path) const {
+  if (!value.is_object()) fail_value(path, value, "an object");
+  return value;
+}
+
+void JsonReader::only_keys(const json& obj, const std::string& path,
+                           const std::set<std::string>& allowed) const {
+  for (auto it = obj.begin(); it != obj.end(); ++it) {
+    if (!allowed.count(it.key())) {
+      std::string list;
+      for (const auto& k : allowed) list += (list.empty() ? "" : ", ") + k;
+      fail(path + "/" + it.key(), "unknown key; expected one of: " + list);
+    }
+  }
+}
+
+const json& JsonReader::required(const json& obj, const std::string& path,
+                                 const std::string& key) const {
+  auto it = obj.find(key);
+  if (it == obj.end()) fail(path + "/" + key, "missing required key");
+  return *it;
+}
+
+double JsonReader::number(const json& value, const std::string& path) const {
+  if (!value.is_number()) fail_value(path, value, "a number");
+  const double x = value.get<double>();
+  if (!std::isfinite(x)) fail_value(path, value, "a finite number");
+  return x;
+}
+
+double JsonReader::positive(const json& value, const std::string& path) const {
+  const double x = number(value, path);
+  if (!(x > 0.0)) fail_value(path, value, "a positive number");
+  return x;
+}
+
+double JsonReader::non_negative(const json& value, const std::string& path) const {
+  const double x = number(value, path);
+  if (!(x >= 0.0)) fail_value(path, value, "a number >= 0");
+  return x;
+}
+
+bool JsonReader::boolean(const json& value, const std::string& path) const {
+  if (!value.is_boolean()) fail_value(path, value, "true or false");
+  return value.get<bool>();
+}
+
+std::string JsonReader::string(const json& value, const std::string& path) const {
+  if (!value.is_string()) fail_value(path, value, "a string");
+  return value.get<std::string>();
+}
+
+Vec3 JsonReader::vec3(const json& value, const std::string& path) const {
+  if (!value.is_array() || value.size() != 3) fail_value(path, value, "an array of 3 numbers");
+  return Vec3(number(value[0], path + "/0"), number(value[1], path + "/1"),
+              number(value[2], path + "/2"));
+}
+
+Vec3 JsonReader::direction(const json& value, const std::string& path) const {
+  const Vec3 v = vec3(value, path);
+  if (!(v.norm() > 0.0) || !std::isfinite(v.norm())) {
+    fail_value(path, value, "a non-zero direction [x, y, z]");
+  }
+  return v.normalized();
+}
+
+Quat JsonReader::quaternion(const json& value, const std::string& path) const {
+  if (!value.is_array() || value.size() != 4) {
+    fail_value(path, value, "a unit quaternion [w, x, y, z]");
+  }
+  Quat q(number(value[0], path + "/0"), number(value[1], path + "/1"),
+         number(value[2], path + "/2"), number(value[3], path + "/3"));
+  // Accept rounding in hand-written or generated files; reject anything that is not meant to be
+  // a unit quaternion.
+  if (std::abs(q.norm() - 1.0) > 1e-6) {
+    fail_value(path, value,
+               "a unit quaternion [w, x, y, z] (norm within 1e-6 of 1; this has norm " +
+                   std::to_string(q.norm()) + ")");
+  }
+  q.normalize();
+  return q;
+}
+
+}  // namespace palpable

@@ -1,0 +1,55 @@
+#pragma once
+// The one reader of Palpable's JSON inputs — scenes, references, impact specs, plot parameters:
+// it walks a document keeping the JSON pointer of every value it reads, so that each error names
+// the file (or option), the pointer, the value found and what was expected:
+//   scene.json:/bodies/2/shape/radius: got -1, expected a positive number
+#include "core/check.hpp"
+#include "core/types.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <set>
+#include <string>
+
+namespace palpable {
+
+class JsonReader {
+ public:
+  // `source` prefixes every error's location: a file name ("scene.json", then ":" + pointer) or
+  // an option ("--param").
+  explicit JsonReader(std::string source, std::string separator = ":")
+      : source_(std::move(source)), separator_(std::move(separator)) {}
+
+  // True for an error this reader raised (it already names the JSON path).
+  bool is_ours(const InputError& e) const;
+
+  [[noreturn]] void fail(const std::string& path, const std::string& message) const;
+  [[noreturn]] void fail_value(const std::string& path, const nlohmann::json& value,
+                               const std::string& expected) const;
+
+  const nlohmann::json& object(const nlohmann::json& value, const std::string& path) const;
+  // Rejects keys not in `allowed` (typos would otherwise be silently ignored).
+  void only_keys(const nlohmann::json& obj, const std::string& path,
+                 const std::set<std::string>& allowed) const;
+  const nlohmann::json& required(const nlohmann::json& obj, const std::string& path,
+                                 const std::string& key) const;
+
+  double number(const nlohmann::json& value, const std::string& path) const;
+  double positive(const nlohmann::json& value, const std::string& path) const;
+  double non_negative(const nlohmann::json& value, const std::string& path) const;
+  bool boolean(const nlohmann::json& value, const std::string& path) const;
+  std::string string(const nlohmann::json& value, const std::string& path) const;
+  Vec3 vec3(const nlohmann::json& value, const std::string& path) const;
+  // A non-zero 3-vector, normalised (a direction).
+  Vec3 direction(const nlohmann::json& value, const std::string& path) const;
+  Quat quaternion(const nlohmann::json& value, const std::string& path) const;
+
+ private:
+  std::string source_;
+  std::string separator_;
+};
+
+// A JSON value for an error message: its text, cut at 60 characters.
+std::string describe_json(const nlohmann::json& value);
+
+}  // namespace palpable
