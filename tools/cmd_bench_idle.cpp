@@ -8,7 +8,7 @@
 #include "tools/commands.hpp"
 #include "tools/lib/cli_checks.hpp"
 #include "tools/lib/exit_codes.hpp"
-#include "tools/lib/gas.hpp"
+#include "scenarios/gas.hpp"
 #include "tools/lib/median.hpp"
 
 #include <algorithm>

@@ -1,4 +1,4 @@
-#include "tools/lib/gas.hpp"
+#include "scenarios/gas.hpp"
 
 #include "core/check.hpp"
 #include "core/mass_properties.hpp"
@@ -8,7 +8,7 @@
 #include <random>
 #include <string>
 
-namespace palpable::tools {
+namespace palpable {
 
 namespace {
 
@@ -110,4 +110,4 @@ void add_idle_bodies(World& world, int count, IdleKind kind, const Vec3& corner_
   }
 }
 
-}  // namespace palpable::tools
+}  // namespace palpable

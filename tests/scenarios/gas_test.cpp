@@ -2,7 +2,7 @@
 // idle bodies far away change no event and no query of the run, and add no broad-phase test;
 // frictionless contacts are closed form (no Runge-Kutta step); sphere pairs are checked once per
 // collision, at their exact time of impact.
-#include "tools/lib/gas.hpp"
+#include "scenarios/gas.hpp"
 
 #include "core/mass_properties.hpp"
 #include "core/shape.hpp"
@@ -13,7 +13,6 @@
 #include <random>
 
 using namespace palpable;
-using namespace palpable::tools;
 
 namespace {
 

@@ -1,5 +1,5 @@
 #pragma once
-// Scenes built in code for the cost benchmarks and tests (issue 7, "paying only for what a scene
+// Scenes built in code for the cost benchmarks and tests ("paying only for what a scene
 // needs"): a gas of spheres in zero gravity inside a cubic container, and idle bodies to add far
 // from the action.
 //
@@ -12,7 +12,7 @@
 
 #include <cstdint>
 
-namespace palpable::tools {
+namespace palpable {
 
 enum class GasWalls {
   kHalfspaces,  // six fixed halfspaces (exact sphere-plane times of impact)
@@ -48,4 +48,4 @@ enum class IdleKind {
 // 2 size_m whose first corner is `corner_W`. All share one shape.
 void add_idle_bodies(World& world, int count, IdleKind kind, const Vec3& corner_W, double size_m);
 
-}  // namespace palpable::tools
+}  // namespace palpable
