@@ -163,6 +163,13 @@ inline constexpr double kRestingApproachSlack = 1e-9;
 // Relative rounding of a relative normal velocity [-], times the bodies' contact-point speeds:
 // u_n below -this x scale is approaching, above is not.
 inline constexpr double kVelocityRounding = 1e-12;
+// Two bodies closer than this, times the sum of their reaches, touch [-]: an impact is applied
+// there (the instant its gap closes), not sought closer.
+inline constexpr double kTouchingGap = 1e-12;
+// Checks of one impact's approach to the instant of contact, by conservative advancement, before
+// it is applied where it is (each closes the gap by the ratio of the true closing speed to its
+// bound; an exact bound needs one).
+inline constexpr int kMaxApproachSteps = 64;
 // Hulls built from points: relative coplanarity tolerance [-], times the diagonal of the points'
 // bounding box (facets whose planes agree within it become one face; thinner point sets are
 // rejected as coplanar). A scene's hull sets its own with "coplanar_tolerance".

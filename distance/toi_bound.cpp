@@ -196,11 +196,13 @@ bool exact_sphere_plane(const Body& sphere_body, const BodyState& s, double radi
 
 }  // namespace
 
-ToiBound time_of_impact(const Body& body1, const BodyState& state1, const ShapeGeometry& geometry1,
-                        const Body& body2, const BodyState& state2, const ShapeGeometry& geometry2,
-                        const DistanceResult& closest, const Vec3& gravity_W,
-                        const Settings& settings) {
-  const double d_target = derived_target_gap(settings);
+namespace {
+
+ToiBound single_time_of_impact(const Body& body1, const BodyState& state1,
+                               const ShapeGeometry& geometry1, const Body& body2,
+                               const BodyState& state2, const ShapeGeometry& geometry2,
+                               const DistanceResult& closest, const Vec3& gravity_W,
+                               const Settings& settings, double d_target) {
   const ShapeGeometry::Piece* sphere1 = centred_sphere(geometry1);
   const ShapeGeometry::Piece* sphere2 = centred_sphere(geometry2);
   ToiBound exact;
@@ -226,16 +228,16 @@ ToiBound time_of_impact(const Body& body1, const BodyState& state1, const ShapeG
   return toi_bound(m1, m2, closest, d_target, settings);
 }
 
-ToiBound time_of_impact(const Body& body1, const BodyState& state1, const ShapeGeometry& geometry1,
-                        const Body& body2, const BodyState& state2, const ShapeGeometry& geometry2,
-                        const DistanceResult& closest, const PairCache& cache,
-                        const Vec3& gravity_W, const Settings& settings) {
+ToiBound pair_time_of_impact(const Body& body1, const BodyState& state1,
+                             const ShapeGeometry& geometry1, const Body& body2,
+                             const BodyState& state2, const ShapeGeometry& geometry2,
+                             const DistanceResult& closest, const PairCache& cache,
+                             const Vec3& gravity_W, const Settings& settings, double d_target) {
   if (cache.piece_results().empty()) {
-    return time_of_impact(body1, state1, geometry1, body2, state2, geometry2, closest, gravity_W,
-                          settings);
+    return single_time_of_impact(body1, state1, geometry1, body2, state2, geometry2, closest,
+                                 gravity_W, settings, d_target);
   }
   // Body-level motions bound every piece: the rotation radius and reach cover all pieces.
-  const double d_target = derived_target_gap(settings);
   const ToiMotion m1 =
       toi_motion(body1, state1, geometry1, gravity_W, state2.x_W, geometry2.reach(), settings);
   const ToiMotion m2 =
@@ -247,6 +249,34 @@ ToiBound time_of_impact(const Body& body1, const BodyState& state1, const ShapeG
     if (b.dt < best.dt) best = b;
   }
   return best;
+}
+
+}  // namespace
+
+ToiBound time_of_impact(const Body& body1, const BodyState& state1, const ShapeGeometry& geometry1,
+                        const Body& body2, const BodyState& state2, const ShapeGeometry& geometry2,
+                        const DistanceResult& closest, const Vec3& gravity_W,
+                        const Settings& settings) {
+  return single_time_of_impact(body1, state1, geometry1, body2, state2, geometry2, closest,
+                               gravity_W, settings, derived_target_gap(settings));
+}
+
+ToiBound time_of_impact(const Body& body1, const BodyState& state1, const ShapeGeometry& geometry1,
+                        const Body& body2, const BodyState& state2, const ShapeGeometry& geometry2,
+                        const DistanceResult& closest, const PairCache& cache,
+                        const Vec3& gravity_W, const Settings& settings) {
+  return pair_time_of_impact(body1, state1, geometry1, body2, state2, geometry2, closest, cache,
+                             gravity_W, settings, derived_target_gap(settings));
+}
+
+ToiBound time_to_touch(const Body& body1, const BodyState& state1, const ShapeGeometry& geometry1,
+                       const Body& body2, const BodyState& state2, const ShapeGeometry& geometry2,
+                       const DistanceResult& closest, const PairCache& cache,
+                       const Vec3& gravity_W, const Settings& settings) {
+  Settings unfloored = settings;
+  unfloored.toi_min_progress_s = 0.0;
+  return pair_time_of_impact(body1, state1, geometry1, body2, state2, geometry2, closest, cache,
+                             gravity_W, unfloored, 0.0);
 }
 
 }  // namespace palpable

@@ -118,4 +118,13 @@ ToiBound time_of_impact(const Body& body1, const BodyState& state1, const ShapeG
                         const DistanceResult& closest, const PairCache& cache,
                         const Vec3& gravity_W, const Settings& settings);
 
+// The time until the pair touches (gap 0) [s], to place an impact at the instant of contact
+// rather than where the bound stopped (half an envelope up): exact where time_of_impact is exact,
+// otherwise the conservative bound aimed at gap 0 and never floored — a lower bound on the
+// instant, which repeated checks approach (conservative advancement).
+ToiBound time_to_touch(const Body& body1, const BodyState& state1, const ShapeGeometry& geometry1,
+                       const Body& body2, const BodyState& state2, const ShapeGeometry& geometry2,
+                       const DistanceResult& closest, const PairCache& cache,
+                       const Vec3& gravity_W, const Settings& settings);
+
 }  // namespace palpable

@@ -57,6 +57,8 @@ class PairSet {
     // Its held contact let go at last_collision_t (lift-off, separation): at that instant it is
     // not a collision unless it truly approaches (gravity pressing it is what just failed).
     bool lifted = false;
+    // Checks of an impact's approach to the instant of contact so far (Simulation, time_to_contact).
+    std::uint8_t approach_steps = 0;
   };
 
   // One geometry per distinct shape (shapes are shared between bodies). Throws InputError

@@ -39,6 +39,7 @@ struct SimulationStats {
   std::uint64_t retry_limit_hits = 0;    // ... more than settings.retry_limit times (skipped)
   std::uint64_t floored_bounds = 0;      // bounds raised to settings.toi_min_progress_s
   std::uint64_t exact_bounds = 0;        // bounds that are exact times of impact
+  std::uint64_t approach_checks = 0;     // checks of an impact moved on to its instant of contact
   std::uint64_t penetrations = 0;        // queries that found overlapping bodies
   std::uint64_t distance_failures = 0;   // closest-feature walks that hit their step limit
   std::uint64_t impulse_failures = 0;    // collisions whose integration failed

@@ -78,6 +78,34 @@ CollisionRecord Simulation::Impl::collide(const PairSet::Pair& p, Contact& c, do
   return std::move(out.record);
 }
 
+double Simulation::Impl::time_to_contact(const PairSet::Pair& p, const Contact& c,
+                                         const DistanceResult& contact, double t) const {
+  // Only impacts: a microcollision is resting contact (held under the persistent model), and
+  // lands where the train puts it. Pairs with a held body keep the envelope's instant (their
+  // bound follows the island's motion, not a closed form).
+  if (contact.status == ContactStatus::kPenetrating || island(p.a) || island(p.b) ||
+      p.approach_steps >= kMaxApproachSteps) {
+    return 0.0;
+  }
+  double scale = 0.0;  // the finite reaches (a halfspace's is infinite)
+  for (BodyId id : {p.a, p.b}) {
+    if (std::isfinite(pairs.geometry(id).reach())) scale += pairs.geometry(id).reach();
+  }
+  if (!(contact.distance > kTouchingGap * scale)) return 0.0;
+  if (is_microcollision(initial_normal_velocity(c), c.v_micro, settings())) return 0.0;
+  const BodyState& s1 = body(p.a).state;
+  const BodyState& s2 = body(p.b).state;
+  const ToiBound b = time_to_touch(body(p.a), s1, pairs.geometry(p.a), body(p.b), s2,
+                                   pairs.geometry(p.b), contact, p.cache, world.gravity_W,
+                                   settings());
+  // Only where the instant is exact (spheres against spheres and planes). Polyhedra keep the
+  // envelope's instant: at a gap of 0 their closest features degenerate (a face landing flat on
+  // a face was found at one corner, lost its centre of pressure and tumbled), so they collide
+  // where the bound aimed, half an envelope up.
+  if (!b.exact || !(b.dt > 0.0) || !std::isfinite(b.dt) || !(t + b.dt > t)) return 0.0;
+  return b.dt;
+}
+
 std::optional<CollisionRecord> Simulation::Impl::check_pair(std::uint32_t index, double t) {
   PairSet::Pair& p = pairs.pair(index);
   p.event = EventQueue::kNoEvent;  // it was just popped
@@ -99,9 +127,18 @@ std::optional<CollisionRecord> Simulation::Impl::check_pair(std::uint32_t index,
   // of pressure does not approach (the hold, not a microcollision train, must catch it).
   const bool lands = approaching(c) || (persistent() && patch_approaching(c, s1, s2));
   if (!lands || lifting(p, c, t)) {
+    p.approach_steps = 0;
     schedule_pair(index, next_check_time(p, s1, s2, dr, t, &c));
     return std::nullopt;
   }
+  if (const double dt = time_to_contact(p, c, contact, t); dt > 0.0) {
+    // An impact lands where the gap closes, not where the bound stopped (half an envelope up).
+    ++p.approach_steps;
+    ++stats.approach_checks;
+    schedule_pair(index, t + dt);
+    return std::nullopt;
+  }
+  p.approach_steps = 0;
   if (t == p.last_collision_t) {
     ++p.collisions_at_t;
     ++stats.retries;

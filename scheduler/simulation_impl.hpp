@@ -136,8 +136,14 @@ struct Simulation::Impl {
   CollisionRecord collide(const PairSet::Pair& p, Contact& c, double t,
                           const ResolveOptions& options = ResolveOptions{});
 
-  // A pair's event: collide if within the envelope and approaching, else re-bound. Returns the
-  // collision, if any.
+  // The time from t until the gap of an impact (an approach faster than v_micro) closes [s],
+  // where it is exact (spheres against spheres and planes). 0: collide now (touching already, a
+  // microcollision, a held body, polyhedra, or kMaxApproachSteps spent).
+  double time_to_contact(const PairSet::Pair& p, const Contact& c, const DistanceResult& contact,
+                         double t) const;
+
+  // A pair's event: collide if within the envelope and approaching — an impact at the instant
+  // its gap closes —, else re-bound. Returns the collision, if any.
   std::optional<CollisionRecord> check_pair(std::uint32_t index, double t);
 
   // ---------------------------------------------------------------- persistent contact

@@ -56,13 +56,13 @@ struct Expected {
 // The committed final-state hashes of the shipped scenes.
 const Expected kExpected[] = {
     {"ball_on_platter.json", 0xa52035a6782bfdb0ull},
-    {"balls_in_dish.json", 0x32a8e3605d4b6552ull},
+    {"balls_in_dish.json", 0xc5cfd1401f806573ull},
     {"block_on_ramp_accelerating.json", 0x4972afac4af444eaull},
     {"block_on_ramp_decelerating.json", 0x6459c58004f54f57ull},
-    {"bowling.json", 0xd9545ee0c1e7a162ull},
-    {"chain_of_balls.json", 0x2f767b4f88f40517ull},
+    {"bowling.json", 0x4bcef7ec1e602a83ull},
+    {"chain_of_balls.json", 0x69cecbdff0e5ac8dull},
     {"coins.json", 0x5d88e655d1501271ull},
-    {"pool_break.json", 0x555ee332e910483dull},
+    {"pool_break.json", 0x28364c4193e1c873ull},
     {"sphere_slide_to_roll.json", 0x8d0cc90c21d15ce4ull},
 };
 

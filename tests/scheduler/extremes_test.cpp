@@ -565,7 +565,9 @@ TEST_CASE("speeds 1e-9 to 1e4 m/s: spheres and a box hitting a wall, no penetrat
       spec.world.default_material = Material{0.5, 1.0};
       const double envelope = spec.world.settings.envelope_m;
       // Hits at about t = 0.1 s (at once for speeds whose 0.1 s travel is inside the envelope).
-      const double gap0 = 0.9 * envelope + speed * 0.1;
+      // Spheres collide where their gap closes (the exact instant of contact), so theirs starts
+      // at the 0.1 s travel alone, inside the envelope for the slow ones.
+      const double gap0 = kind == 0 ? speed * 0.1 : 0.9 * envelope + speed * 0.1;
       if (kind == 0) {
         spec.world.add(
             sphere_body("a", 0.1, 1.0, Vec3(-0.1 - 0.5 * gap0, 0, 0), Vec3(speed, 0, 0)));
@@ -669,16 +671,16 @@ TEST_CASE("an elastic ball bouncing for 1e4 s keeps its energy and its period",
   spec.world.add(sphere_body("ball", r, 1.0, Vec3(0, 0, r + h0)));
   spec.t_end = 1e4;
   spec.interval = 0.1;
-  // Bounce period T = 2 sqrt(2 h / g) = 0.903 s: 11,074 bounces; each is one exact-time pair
-  // event plus a re-bound, and the 0.25 s horizons add 40,000: 1e5 events is the cap.
+  // Bounce period T = 2 sqrt(2 h / g) = 0.903 s: 11,074 bounces; each is two exact-time pair
+  // events (the envelope reached, then the instant of contact) plus a re-bound, and the 0.25 s
+  // horizons add 40,000: 1e5 events is the cap.
   spec.event_cap = 100000;
   Outcome out = run(spec);
   // Each bounce ends the restitution phase to the integration tolerance, an energy error of at
   // most tolerance x |p| u = 1e-9 x 2 m v^2 = 4e-8 J; all signs alike would give 4e-4 J over
   // 11,074 bounces. Rounding is far smaller; the record check bounds each bounce.
   check_invariants(spec, out, 1e-12 * (std::abs(out.e0) + 1.0));
-  const double d_target = 0.5 * spec.world.settings.envelope_m;  // collisions at half the envelope
-  const double h = h0 - d_target;
+  const double h = h0;  // impacts at the instant of contact
   const double v_in = std::sqrt(2 * kG * h);
   const double period = 2 * v_in / kG;
   REQUIRE(out.records.size() > 100);

@@ -84,9 +84,10 @@ TEST_CASE("chain of balls: the far ball leaves, everyone stays on the table",
       fastest_last = std::max(fastest_last, sample[last].v_W.x());
       for (std::size_t i = 1; i < world.bodies.size(); ++i) {
         const double radius = 0.0125;
-        // Never through the table. Balls may hop: ball-ball friction on spinning balls has a
-        // vertical component (a fraction of a millimetre here).
-        CHECK(sample[i].x_W.z() >= radius);
+        // Never through the table (a ball held touching it sits at its radius to rounding, 3e-17
+        // m measured). Balls may hop: ball-ball friction on spinning balls has a vertical
+        // component (a fraction of a millimetre here).
+        CHECK(sample[i].x_W.z() >= radius - 1e-12);
         CHECK(sample[i].x_W.z() <= 2 * radius);
       }
     }
@@ -111,8 +112,9 @@ TEST_CASE("pool break: the rack scatters, no ball leaves the table, no energy cr
         const Vec3& x = sample[i].x_W;
         CHECK(std::abs(x.x()) <= half_length - radius + world.settings.envelope_m);
         CHECK(std::abs(x.y()) <= half_width - radius + world.settings.envelope_m);
-        // Never through the cloth; hops off spinning balls' friction stay below a ball radius.
-        CHECK(x.z() >= radius);
+        // Never through the cloth (a ball held touching it sits at its radius to rounding);
+        // hops off spinning balls' friction stay below a ball radius.
+        CHECK(x.z() >= radius - 1e-12);
         CHECK(x.z() <= 2 * radius);
       }
       if (world.bodies[i].name != "cue" &&

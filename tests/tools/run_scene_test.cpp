@@ -165,10 +165,10 @@ TEST_CASE("two runs of a scene write byte-identical traces and events", "[tools]
 }
 
 TEST_CASE("numerical trouble warns, and with --strict fails leaving no file", "[tools][run]") {
-  // retry_limit = 1: the chain of balls has pairs colliding again at one instant (each ball
-  // struck while touching its neighbours), so the limit is hit and those pairs are skipped.
+  // retry_limit = 1: the coins have pairs colliding again at one instant (a coin landing flat
+  // on the table, corner after corner), so the limit is hit and those pairs are skipped.
   RunOptions options;
-  options.scene_path = scene("chain_of_balls.json");
+  options.scene_path = scene("coins.json");
   options.overrides = {"/settings/retry_limit=1"};
   options.trace_path = "run_scene_test_strict.csv";
   const RunResult r = run_scene(options);

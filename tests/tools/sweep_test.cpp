@@ -310,10 +310,10 @@ TEST_CASE("a combination that fails when run is named with its values", "[tools]
 }
 
 TEST_CASE("a run's numerical trouble shows in its row", "[tools][sweep]") {
-  // As in run_scene_test: the chain of balls hits a retry limit of 1 (pairs colliding again at
-  // one instant), and runs clean with the default limit.
+  // As in run_scene_test: the coins hit a retry limit of 1 (pairs colliding again at one
+  // instant), and run clean with the default limit.
   SweepOptions options;
-  options.scene_path = scene("chain_of_balls.json");
+  options.scene_path = scene("coins.json");
   options.parameters = {palpable::tools::parse_vary("/settings/retry_limit=1,100")};
   const SweepTable table = palpable::tools::run_sweep(options);
   REQUIRE(table.rows.size() == 2);

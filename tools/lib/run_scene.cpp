@@ -193,6 +193,7 @@ nlohmann::json summary_json(const RunResult& r) {
                      {"retry_limit_hits", s.retry_limit_hits},
                      {"floored_bounds", s.floored_bounds},
                      {"exact_bounds", s.exact_bounds},
+                     {"approach_checks", s.approach_checks},
                      {"penetrations", s.penetrations},
                      {"distance_failures", s.distance_failures},
                      {"impulse_failures", s.impulse_failures},
