@@ -25,6 +25,7 @@
 // velocity, which jitters by about a_t tau / 2 during microcollision contact; DESIGN.md §4).
 #include "core/types.hpp"
 #include "scenarios/trace.hpp"
+#include "scheduler/world.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -37,7 +38,16 @@ namespace palpable {
 // of the expected kind, and (when `body_names` is not empty) body names that are bodies of the
 // scene. Throws InputError naming `where` + the key.
 void validate_reference(const nlohmann::json& spec, const std::string& where,
-                        const std::vector<std::string>& body_names = {});
+                        const std::vector<std::string>& body_names = {}, bool require_all = true);
+
+// A scene's reference with every parameter it omits derived from the scene, so that the closed
+// form follows the scene (`--set` of a friction, a start, a spin): given "support" (the body the
+// reference body rests on), the incline's normal, angle, down-slope direction, friction, gravity
+// and launch speed; the turntable's Ω, axis, k and launch state; slide-to-roll's friction,
+// gravity, radius, k, normal and launch state. Parameters the spec gives are kept. Throws
+// InputError naming `where` for a support the body does not rest on.
+nlohmann::json complete_reference(const nlohmann::json& spec, const std::string& where,
+                                  const World& world);
 
 // The figure a sweep reports as "error" for a reference's figures (compare_with_reference's
 // result): the worst relative error of what the closed form predicts — stop time and creep for a

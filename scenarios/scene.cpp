@@ -338,8 +338,9 @@ Scene scene_from_json(const json& doc, const std::string& source) {
     // Checked whole before anything runs: a bad reference must not cost a run.
     std::vector<std::string> names;
     for (const Body& b : scene.world.bodies) names.push_back(b.name);
-    validate_reference(doc["reference"], source + ":/reference", names);
-    scene.reference = doc["reference"];
+    validate_reference(doc["reference"], source + ":/reference", names, false);
+    scene.reference = complete_reference(doc["reference"], source + ":/reference", scene.world);
+    validate_reference(scene.reference, source + ":/reference", names, true);
   }
   return scene;
 }

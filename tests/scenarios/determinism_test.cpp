@@ -55,10 +55,10 @@ struct Expected {
 
 // The committed final-state hashes of the shipped scenes.
 const Expected kExpected[] = {
-    {"ball_on_platter.json", 0xa52035a6782bfdb0ull},
+    {"ball_on_platter.json", 0x23655726ae98e558ull},
     {"balls_in_dish.json", 0xc5cfd1401f806573ull},
-    {"block_on_ramp_accelerating.json", 0x4972afac4af444eaull},
-    {"block_on_ramp_decelerating.json", 0x6459c58004f54f57ull},
+    {"block_on_ramp_accelerating.json", 0x83b1a2d1dab45d2aull},
+    {"block_on_ramp_decelerating.json", 0xbd89a5d2dc23bce0ull},
     {"bowling.json", 0x4bcef7ec1e602a83ull},
     {"chain_of_balls.json", 0x69cecbdff0e5ac8dull},
     {"coins.json", 0x5d88e655d1501271ull},

@@ -1,6 +1,7 @@
 // `palpable compare`'s code path: a trace written to CSV, the reference spec assembled from the
 // command line or a scene, thresholds, and bad input named.
 #include "tools/lib/compare.hpp"
+#include "tools/lib/run_scene.hpp"
 
 #include "core/check.hpp"
 
@@ -94,4 +95,25 @@ TEST_CASE("compare: bad input names the option", "[tools][compare]") {
   no_reference.scene_path = path;  // not JSON
   CHECK_THROWS_AS(palpable::tools::reference_spec(no_reference), palpable::InputError);
   std::remove(path.c_str());
+}
+
+TEST_CASE("compare --max fails on a figure whose closed form does not apply",
+          "[tools][compare][reference]") {
+  // A run whose block slid off its ramp (mu 0.6: it would stop only at 10.2 s, after 3 s): the
+  // incline's figures are null, and a limit on them fails instead of passing a wrong number.
+  palpable::tools::RunOptions run;
+  run.scene_path = std::string(PALPABLE_SOURCE_DIR) + "/scenarios/block_on_ramp_decelerating.json";
+  run.overrides = {"/materials/pairs/0/friction=0.6"};
+  run.trace_path = "compare_test_off_ramp.csv";
+  palpable::tools::run_scene(run);
+  CompareOptions options;
+  options.trace_path = run.trace_path;
+  options.reference.scene_path = run.scene_path;
+  options.reference.params = {"friction=0.6"};
+  options.max = {"stop_time_error_s=1"};
+  const auto result = compare_trace(options);
+  REQUIRE(result.exceeded.size() == 1);
+  CHECK(result.exceeded[0].find("stop_time_error_s is null") != std::string::npos);
+  CHECK(result.exceeded[0].find("left its support") != std::string::npos);
+  std::remove(run.trace_path.c_str());
 }

@@ -210,3 +210,31 @@ TEST_CASE("a trace too short for its reference is run and says the comparison is
   CHECK_THROWS_WITH(run_scene(options), Catch::Contains("/reference"));
   CHECK_FALSE(exists(options.trace_path));
 }
+
+TEST_CASE("a scene's reference follows --set: its closed form is the new scene's",
+          "[tools][run][reference]") {
+  // The decelerating ramp's reference gives only its body and support: friction, angle, normal
+  // and launch speed come from the scene, so overriding them changes the closed form.
+  const double g = 9.81, theta = 30.0 * 3.14159265358979323846 / 180.0;
+  RunOptions options;
+  options.scene_path = scene("block_on_ramp_decelerating.json");
+  options.overrides = {"/materials/pairs/0/friction=0.8", "/bodies/1/velocity=[0.8660254037844386, 0, -0.5]"};
+  const RunResult r = run_scene(options);
+  const double a = g * (std::sin(theta) - 0.8 * std::cos(theta));
+  CHECK(r.reference["acceleration_closed_form"].get<double>() == Approx(a).epsilon(1e-12));
+  CHECK(r.reference["stop_time_closed_form_s"].get<double>() == Approx(1.0 / -a).epsilon(1e-12));
+  CHECK(r.scene.reference["friction"] == 0.8);
+  CHECK(r.scene.reference["initial_speed"].get<double>() == Approx(1.0).epsilon(1e-15));
+  CHECK(r.scene.reference["angle_deg"].get<double>() == Approx(30.0).epsilon(1e-12));
+  CHECK_FALSE(r.reference.contains("premise_failed"));
+  // Its figures are measured against that closed form (microcollisions: to about 1e-4 s).
+  CHECK(std::abs(r.reference["stop_time_error_s"].get<double>()) < 1e-3);
+
+  // mu = 0.6: the block decelerates at 0.196 m/s^2 and would stop at 10.2 s, after the run's
+  // 3 s — it slides off the ramp's end and falls. The stop figures are null, with the reason.
+  options.overrides = {"/materials/pairs/0/friction=0.6"};
+  const RunResult off = run_scene(options);
+  REQUIRE(off.reference.contains("premise_failed"));
+  CHECK(off.reference["stop_time_error_s"].is_null());
+  CHECK(off.reference["off_plane_max_m"].get<double>() > 0.01);  // off the end, falling
+}

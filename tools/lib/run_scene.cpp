@@ -206,7 +206,10 @@ nlohmann::json summary_json(const RunResult& r) {
                      {"box_tests", s.box_tests}};
   const Settings& st = r.scene.world.settings;
   j["settings"] = settings_json(st, r.scene.world.gravity_W.norm());
-  if (!r.reference.is_null()) j["reference"] = r.reference;
+  if (!r.reference.is_null()) {
+    j["reference"] = r.reference;
+    j["reference_parameters"] = r.scene.reference;  // as given, and derived from the scene
+  }
   return j;
 }
 
