@@ -202,6 +202,40 @@ TEST_CASE("persistent: a sphere slides, then rolls at the closed-form instant an
   }
 }
 
+TEST_CASE("persistent: rolling and spinning resistance stop a ball in finite time, exactly",
+          "[scheduler][persistent]") {
+  // Solid sphere (k = 2/5) rolling on a fixed plane against the couple d N: it decelerates at
+  // 5 d g / (7 R) and stops at t = v0 / a after v0^2 / (2 a), then rests. Spinning about the
+  // vertical against s N: the spin decays at 5 s g / (2 R^2) and stops at w0 / that. (Under
+  // microcollisions both lag one flight and never stop: 9 mm past the stopping point at the
+  // default envelope.)
+  const double R = 0.1, d = 1e-3, sres = 2e-3, v0 = 1.0, w_spin = 3.0;
+  World world;
+  world.settings = persistent();
+  Material m{0.5, 0.0};
+  m.rolling_resistance = d;
+  m.spinning_resistance = sres;
+  world.default_material = m;
+  world.add(test::fixed_ground("table"));
+  world.add(test::sphere_body("ball", R, 1.0, Vec3(0, 0, R), Vec3(v0, 0, 0),
+                              Vec3(0, v0 / R, w_spin)));
+  Simulation sim(world, SimulationOptions{0.01});
+  Modes rec;
+  sim.run_until(16.0, &rec);
+  const double a = 5.0 * d * kG / (7.0 * R);
+  const double t_roll_stop = v0 / a, s_stop = v0 * v0 / (2.0 * a);
+  const double t_spin_stop = w_spin / (5.0 * sres * kG / (2.0 * R * R));
+  REQUIRE(rec.first("roll_stop"));
+  REQUIRE(rec.first("spin_stop"));
+  CHECK(rec.first("roll_stop")->t == Approx(t_roll_stop).margin(1e-9));
+  CHECK(rec.first("spin_stop")->t == Approx(t_spin_stop).margin(1e-9));
+  const BodyState end = sim.state_at(BodyId{1}, 16.0);
+  CHECK(end.x_W.x() == Approx(s_stop).margin(1e-9));
+  CHECK(end.v_W.norm() == 0.0);
+  CHECK(end.w_W.norm() == 0.0);
+  REQUIRE(rec.first("rest"));
+}
+
 TEST_CASE("persistent: a ball rolling on a turntable stays on the closed-form circle",
           "[scheduler][persistent]") {
   // Rolling on a plane spinning at Omega: the centre circles at 2 Omega / 7 on a circle of
