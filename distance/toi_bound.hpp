@@ -18,7 +18,8 @@
 // Rotational terms (an upper bound on the speed, along d̂, of a surface point relative to the
 // body's reference point, over the whole coming interval):
 //   dynamic sphere: 0 (its shape is invariant under rotation about its centre);
-//   dynamic polyhedron or compound: ω̄ ρ (ω̄ from DESIGN.md §2, ρ the maximum radius);
+//   dynamic polyhedron or compound: min(ω̄, |ω_fixed x d̂| + ω_free) ρ (ω̄ from DESIGN.md §2,
+//   ρ the maximum radius; see ToiMotion: spin about d̂ itself does not count);
 //   fixed body: 0;
 //   kinematic body spinning at Ω about an axis: |Ω x d̂| r_axis, r_axis the largest distance from
 //   the axis of the relevant surface points — exactly 0 when Ω is parallel to d̂ (a platter or
@@ -42,6 +43,14 @@ struct ToiMotion {
   // Kinematic body: |spin_W x d̂| * rotation_radius (0 if the cross product is 0).
   bool kinematic = false;
   double omega_bound = 0.0;      // ω̄ [rad/s] (dynamic)
+  // Dynamic: over the interval ω(t) = omega_fixed_W + a part of magnitude <= omega_free, so only
+  // |omega_fixed_W x d̂| + omega_free can move a surface point along d̂ (spin about d̂ cannot
+  // close the gap): a spherical body's ω is constant (omega_free 0); an axisymmetric body's
+  // precesses about its angular momentum L (the part along L is fixed, the rest turns at a
+  // constant magnitude); an asymmetric body's is bounded by ω̄ alone (omega_fixed 0). Left at
+  // its default (infinite), only ω̄ counts: a motion that does not know its ω (a held body's).
+  Vec3 omega_fixed_W = Vec3::Zero();
+  double omega_free = kInfinity;
   Vec3 spin_W = Vec3::Zero();    // Ω [rad/s] (kinematic)
   double rotation_radius = 0.0;  // ρ or r_axis [m]; may be +inf (halfspace)
 };

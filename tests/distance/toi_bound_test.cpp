@@ -78,6 +78,16 @@ TEST_CASE("rotational terms: zero for a platter spinning about its normal, never
   block.omega_bound = 2.0;
   block.rotation_radius = 0.5;
   CHECK(rotational_term(block, Vec3(0, 1, 0)) == Approx(1.0));
+  // A body whose ω is known over the interval (spherical inertia: constant) counts only the part
+  // of ω across d̂: spinning about the normal moves no point along it.
+  block.omega_fixed_W = Vec3(0, 0, 2.0);
+  block.omega_free = 0.0;
+  CHECK(rotational_term(block, Vec3(0, 0, -1)) == 0.0);
+  CHECK(rotational_term(block, Vec3(1, 0, 0)) == Approx(1.0));
+  block.omega_fixed_W = Vec3(0.6, 0, 1.6);  // |ω x d̂| = 0.6 for d̂ = -z
+  CHECK(rotational_term(block, Vec3(0, 0, -1)) == Approx(0.3));
+  block.omega_free = 10.0;  // never above ω̄ ρ
+  CHECK(rotational_term(block, Vec3(0, 0, -1)) == Approx(1.0));
 }
 
 TEST_CASE("exact times of impact for spheres", "[distance][toi]") {

@@ -59,9 +59,9 @@ const Expected kExpected[] = {
     {"balls_in_dish.json", 0xc5cfd1401f806573ull},
     {"block_on_ramp_accelerating.json", 0x83b1a2d1dab45d2aull},
     {"block_on_ramp_decelerating.json", 0xbd89a5d2dc23bce0ull},
-    {"bowling.json", 0x4bcef7ec1e602a83ull},
+    {"bowling.json", 0x4e639b5a2c559196ull},
     {"chain_of_balls.json", 0x69cecbdff0e5ac8dull},
-    {"coins.json", 0x5d88e655d1501271ull},
+    {"coins.json", 0xd1505fe9d0cf81feull},
     {"pool_break.json", 0x28364c4193e1c873ull},
     {"sphere_slide_to_roll.json", 0x8d0cc90c21d15ce4ull},
 };
