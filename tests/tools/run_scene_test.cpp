@@ -236,5 +236,5 @@ TEST_CASE("a scene's reference follows --set: its closed form is the new scene's
   const RunResult off = run_scene(options);
   REQUIRE(off.reference.contains("premise_failed"));
   CHECK(off.reference["stop_time_error_s"].is_null());
-  CHECK(off.reference["off_plane_max_m"].get<double>() > 0.01);  // off the end, falling
+  CHECK(off.reference["off_plane_max_m"].get<double>() > 0.02);  // off the end, falling
 }
