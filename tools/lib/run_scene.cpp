@@ -231,7 +231,8 @@ std::string summary_text(const RunResult& r) {
   const Settings& st = r.scene.world.settings;
   out << "settings         envelope " << st.envelope_m << " m, integration tolerance "
       << st.integration_tolerance << ", law " << to_string(st.restitution_law)
-      << ", microcollision rule " << to_string(st.microcollision_rule) << "\n";
+      << ", microcollision rule " << to_string(st.microcollision_rule) << ", contact model "
+      << to_string(st.contact_model) << "\n";
   if (!r.reference.is_null()) {
     out << "reference        " << r.reference.value("reference", std::string("?")) << "\n";
     for (auto it = r.reference.begin(); it != r.reference.end(); ++it) {
