@@ -1,5 +1,6 @@
 #include "scenarios/scene.hpp"
 
+#include "scenarios/expression.hpp"
 #include "scenarios/json_reader.hpp"
 #include "scenarios/reference.hpp"
 
@@ -260,12 +261,14 @@ Body parse_body(const Reader& r, const json& value, const std::string& path) {
 
 }  // namespace
 
-Scene scene_from_json(const json& doc, const std::string& source) {
+Scene scene_from_json(const json& document, const std::string& source) {
+  // Scene parameters first: every "=expression" becomes its number.
+  const json doc = expand_parameters(document, source);
   Reader r(source);
   r.object(doc, "");
   r.only_keys(doc, "",
-              {"format", "name", "description", "gravity", "end_time", "output", "settings",
-               "materials", "bodies", "reference"});
+              {"format", "name", "description", "parameters", "gravity", "end_time", "output",
+               "settings", "materials", "bodies", "reference"});
   std::string format = r.string(r.required(doc, "", "format"), "/format");
   if (format != "palpable-scene/1") r.fail_value("/format", doc["format"], "\"palpable-scene/1\"");
 

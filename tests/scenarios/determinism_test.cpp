@@ -57,8 +57,8 @@ struct Expected {
 const Expected kExpected[] = {
     {"ball_on_platter.json", 0x23655726ae98e558ull},
     {"balls_in_dish.json", 0xc5cfd1401f806573ull},
-    {"block_on_ramp_accelerating.json", 0x83b1a2d1dab45d2aull},
-    {"block_on_ramp_decelerating.json", 0xbd89a5d2dc23bce0ull},
+    {"block_on_ramp_accelerating.json", 0x6b95d2cc13eadd0aull},
+    {"block_on_ramp_decelerating.json", 0xa6bcfd47994a1366ull},
     {"bowling.json", 0x4e639b5a2c559196ull},
     {"chain_of_balls.json", 0x69cecbdff0e5ac8dull},
     {"coins.json", 0xd1505fe9d0cf81feull},
