@@ -55,7 +55,7 @@ struct Expected {
 
 // The committed final-state hashes of the shipped scenes.
 const Expected kExpected[] = {
-    {"ball_on_platter.json", 0x23655726ae98e558ull},
+    {"ball_on_platter.json", 0xa16074210345a65bull},
     {"balls_in_dish.json", 0xc5cfd1401f806573ull},
     {"block_on_ramp_accelerating.json", 0x6b95d2cc13eadd0aull},
     {"block_on_ramp_decelerating.json", 0xa6bcfd47994a1366ull},
