@@ -2,11 +2,39 @@
 
 #include "core/check.hpp"
 
+#include <cctype>
 #include <cmath>
 
 namespace palpable {
 
 using nlohmann::json;
+
+json parse_json_text(const std::string& text, const std::string& where) {
+  if (text.size() > kMaxJsonBytes) {
+    throw InputError(where, "larger than " + std::to_string(kMaxJsonBytes) + " bytes");
+  }
+  // Depth is checked as the parser enters each level, so nothing deeper is ever built.
+  const json::parser_callback_t limit = [&where](int depth, json::parse_event_t event, json&) {
+    if ((event == json::parse_event_t::object_start || event == json::parse_event_t::array_start) &&
+        depth >= kMaxJsonDepth) {
+      throw InputError(where, "nested deeper than " + std::to_string(kMaxJsonDepth) + " levels");
+    }
+    return true;
+  };
+  try {
+    return json::parse(text, limit);
+  } catch (const json::exception& e) {
+    // Syntax errors, and numbers out of range of a double (e.g. 1e999).
+    throw InputError(where, std::string("not valid JSON: ") + e.what());
+  }
+}
+
+json parse_command_line_value(const std::string& text, const std::string& where) {
+  const bool word_like = !text.empty() && (std::isalpha(static_cast<unsigned char>(text[0])) ||
+                                           text[0] == '_' || text[0] == '=');
+  if (word_like && !json::accept(text)) return text;
+  return parse_json_text(text, where);
+}
 
 std::string describe_json(const json& value) {
   std::string text = value.dump();

@@ -49,6 +49,21 @@ class JsonReader {
   std::string separator_;
 };
 
+// The limits of every JSON input: nesting depth and size. Deeper documents are rejected before
+// they are built (a 100,000-deep one crashed the formatter and the copies that follow parsing).
+inline constexpr int kMaxJsonDepth = 256;
+inline constexpr std::size_t kMaxJsonBytes = std::size_t{1} << 30;  // 1 GiB
+
+// Parses user JSON text: syntax errors, numbers out of range of a double (1e999), documents
+// nested deeper than kMaxJsonDepth or larger than kMaxJsonBytes all throw InputError naming
+// `where` (a file, or an option).
+nlohmann::json parse_json_text(const std::string& text, const std::string& where);
+
+// A value given on the command line (--set, --param, --vary): JSON, or a bare word — text that is
+// not JSON and starts with a letter, '_' or '=' (an expression) — taken as a string. JSON that is
+// out of range (1e999) or too deep is an InputError naming `where`, not a word.
+nlohmann::json parse_command_line_value(const std::string& text, const std::string& where);
+
 // A JSON value for an error message: its text, cut at 60 characters.
 std::string describe_json(const nlohmann::json& value);
 

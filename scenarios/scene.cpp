@@ -357,11 +357,7 @@ json read_json_file(const std::string& path) {
     if (!in) throw InputError(path, "cannot open file");
     text << in.rdbuf();
   }
-  try {
-    return json::parse(text.str());
-  } catch (const json::parse_error& e) {
-    throw InputError(path, std::string("not valid JSON: ") + e.what());
-  }
+  return parse_json_text(text.str(), path);
 }
 
 void apply_override(json& doc, const std::string& assignment) {
@@ -371,12 +367,7 @@ void apply_override(json& doc, const std::string& assignment) {
   }
   std::string pointer_text = assignment.substr(0, eq);
   std::string value_text = assignment.substr(eq + 1);
-  json value;
-  try {
-    value = json::parse(value_text);
-  } catch (const json::parse_error&) {
-    value = value_text;  // a bare word: a string
-  }
+  const json value = parse_command_line_value(value_text, "--set " + assignment);
   try {
     json::json_pointer pointer(pointer_text);
     // Missing optional objects on the way are created (`/settings/envelope` on a scene with no

@@ -1,6 +1,7 @@
 // Scene parsing and validation: a good scene round-trips into bodies; every case of the bad-scene
 // corpus (tests/scenarios/bad_scenes.json) is rejected with a message naming its JSON path.
 #include "scenarios/scene.hpp"
+#include "scenarios/json_reader.hpp"
 
 #include "core/check.hpp"
 
@@ -153,4 +154,26 @@ TEST_CASE("a file that is not JSON is named in the error", "[scenarios][scene]")
   std::remove(path.c_str());
   CHECK_THROWS_WITH(palpable::read_json_file("no/such/file.json"),
                     Catch::Contains("no/such/file.json: cannot open"));
+}
+
+TEST_CASE("hostile JSON: too deep, out of range, on the command line too", "[scenarios][scene]") {
+  // 100,000 levels crashed the formatter after parsing; any depth past the limit is refused
+  // while parsing, naming the source.
+  const std::string deep = "{\"description\": " + std::string(100000, '[') +
+                           std::string(100000, ']') + "}";
+  CHECK_THROWS_WITH(palpable::parse_json_text(deep, "deep.json"),
+                    Catch::StartsWith("deep.json") && Catch::Contains("nested deeper than 256"));
+  CHECK_NOTHROW(palpable::parse_json_text(std::string(255, '[') + std::string(255, ']'), "ok"));
+  CHECK_THROWS_WITH(palpable::parse_json_text("{\"end_time\": 1e999}", "big.json"),
+                    Catch::StartsWith("big.json") && Catch::Contains("number overflow"));
+  json corpus = load_corpus();
+  json doc = corpus["base"];
+  CHECK_THROWS_WITH(palpable::apply_override(doc, "/end_time=1e999"),
+                    Catch::Contains("--set /end_time=1e999"));
+  // Words stay words: choices, and =expressions.
+  palpable::apply_override(doc, "/settings/restitution_law=poisson");
+  CHECK(doc["settings"]["restitution_law"] == "poisson");
+  palpable::apply_override(doc, "/end_time==2*0.5");
+  CHECK(doc["end_time"] == "=2*0.5");
+  CHECK(palpable::scene_from_json(doc, "s.json").end_time == 1.0);
 }

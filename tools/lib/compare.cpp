@@ -1,5 +1,6 @@
 #include "tools/lib/compare.hpp"
 
+#include "scenarios/json_reader.hpp"
 #include "scenarios/scene.hpp"
 
 #include "core/check.hpp"
@@ -20,9 +21,7 @@ std::pair<std::string, json> parse_key_value(const std::string& text, const std:
     throw InputError(option + " " + text, "expected key=value");
   }
   std::string key = text.substr(0, eq), raw = text.substr(eq + 1);
-  json value = json::parse(raw, nullptr, false);
-  if (value.is_discarded()) value = raw;  // a bare word is a string
-  return {key, value};
+  return {key, parse_command_line_value(raw, option + " " + text)};
 }
 
 json reference_spec(const ReferenceOptions& options) {

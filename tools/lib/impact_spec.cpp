@@ -218,13 +218,7 @@ ImpactSpec parse_impact_spec(const json& spec) {
 }
 
 ImpactSpec parse_impact_spec_text(const std::string& text, const std::string& source) {
-  json spec;
-  try {
-    spec = json::parse(text);
-  } catch (const json::exception& e) {
-    // Syntax errors, and numbers out of range of a double (e.g. 1e999).
-    throw InputError(source, std::string("not valid JSON: ") + e.what());
-  }
+  const json spec = parse_json_text(text, source);
   try {
     return parse_impact_spec(spec);
   } catch (const InputError& e) {
