@@ -48,16 +48,26 @@ palpable::tools::CommandRegistration registration{
       return std::function<int()>([options, summary_path, end, end_option] {
         if (end_option->count() > 0) options->end_time = *end;
         options->progress = ::isatty(2) != 0;
+        palpable::tools::check_distinct_outputs({{"--trace", options->trace_path},
+                                                 {"--events", options->events_path},
+                                                 {"--summary-json", *summary_path}});
+        // Opened before the run, so that an unwritable summary fails before any output is made.
+        std::unique_ptr<palpable::tools::AtomicFile> summary_file;
+        if (!summary_path->empty()) {
+          summary_file = std::make_unique<palpable::tools::AtomicFile>(*summary_path);
+        }
         palpable::tools::RunResult result = palpable::tools::run_scene(*options);
-        std::cout << palpable::tools::summary_text(result);
+        // With an output streamed to standard output, the summary goes to stderr.
+        const bool stdout_taken =
+            options->trace_path == "-" || options->events_path == "-" || *summary_path == "-";
+        (stdout_taken ? std::cerr : std::cout) << palpable::tools::summary_text(result);
         for (const std::string& trouble : palpable::tools::numerical_trouble(result.stats)) {
           std::cerr << "palpable: warning: " << options->scene_path << ": " << trouble
                     << ": the trace may be wrong\n";
         }
-        if (!summary_path->empty()) {
-          palpable::tools::AtomicFile out(*summary_path);
-          out.stream() << palpable::tools::summary_json(result).dump(2) << "\n";
-          out.commit();
+        if (summary_file) {
+          summary_file->stream() << palpable::tools::summary_json(result).dump(2) << "\n";
+          summary_file->commit();
         }
         return palpable::tools::kExitOk;
       });

@@ -2,6 +2,7 @@
 // (tools/commands.hpp); this file only parses and dispatches.
 #include "core/check.hpp"
 #include "tools/commands.hpp"
+#include "tools/lib/atomic_file.hpp"
 #include "tools/lib/exit_codes.hpp"
 
 #include <CLI/CLI.hpp>
@@ -28,6 +29,8 @@ std::string group_description(const std::string& group) {
 
 int main(int argc, char** argv) {
   using namespace palpable::tools;
+  // SIGINT, SIGTERM, SIGHUP: remove every temporary output file, exit 128 + signal.
+  install_output_cleanup_on_signals();
   CLI::App app{
       "Palpable: impulse-based, event-driven rigid-body simulation with exact ballistic flight,\n"
       "closest-feature collision detection and Coulomb friction integrated over the normal "

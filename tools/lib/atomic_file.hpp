@@ -1,29 +1,50 @@
 #pragma once
-// Output files are written atomically: into a temporary file beside the target, renamed over it
-// only on commit(). A run that fails (or throws) leaves no partial file behind.
+// Output files never destroy and never stay partial:
+// - a regular file (or a path that does not exist yet) is written into a temporary file beside it
+//   and renamed over it only on commit(); a run that fails, throws or is interrupted by SIGINT,
+//   SIGTERM or SIGHUP leaves no temporary and no partial file behind;
+// - a symbolic link is followed: its target is written (atomically, if a regular file) and the
+//   link stays a link;
+// - a device, FIFO or socket (/dev/null, /dev/stdout, a pipe) and "-" (standard output) are
+//   written straight through, streaming.
 #include <fstream>
+#include <ostream>
 #include <string>
+#include <vector>
 
 namespace palpable::tools {
 
 class AtomicFile {
  public:
-  // Opens "<path>.tmp-<pid>" for writing; throws std::runtime_error naming the path on failure.
+  // Throws std::runtime_error naming the path when it cannot be opened.
   explicit AtomicFile(std::string path);
   AtomicFile(const AtomicFile&) = delete;
   AtomicFile& operator=(const AtomicFile&) = delete;
   ~AtomicFile();  // removes the temporary file unless committed
 
-  std::ostream& stream() { return out_; }
+  std::ostream& stream() { return *target_; }
   const std::string& path() const { return path_; }
-  // Flushes, closes and renames over the target; throws on any I/O error.
+  // Flushes, closes and renames over the target (atomic mode); throws on any I/O error.
   void commit();
+  // True when writing straight through (device, FIFO, socket, standard output).
+  bool streaming() const { return temp_path_.empty(); }
 
  private:
-  std::string path_;
-  std::string temp_path_;
+  std::string path_;       // as given
+  std::string final_path_; // where the data ends up (a symlink's target)
+  std::string temp_path_;  // empty when streaming
   std::ofstream out_;
+  std::ostream* target_ = &out_;
   bool committed_ = false;
+  int slot_ = -1;  // in the signal handler's table of live temporaries
 };
+
+// Installs handlers for SIGINT, SIGTERM and SIGHUP that remove every live temporary file of an
+// AtomicFile and exit with 128 + the signal number (the shell's convention: 130 for SIGINT).
+void install_output_cleanup_on_signals();
+
+// Throws InputError when two of the given outputs (option name, path) are the same file: a
+// device may be named twice (/dev/null), a file may not (the outputs would interleave).
+void check_distinct_outputs(const std::vector<std::pair<std::string, std::string>>& outputs);
 
 }  // namespace palpable::tools

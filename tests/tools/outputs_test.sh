@@ -1,0 +1,49 @@
+#!/usr/bin/env bash
+# The README's promises about output files, as a user meets them (issue 20): devices and links are
+# written through, never replaced; "-" streams to stdout; one file is never two outputs; an
+# interrupted run leaves no temporary file and exits 128 + signal.
+# Usage: outputs_test.sh PALPABLE SCENARIOS_DIR
+set -uo pipefail
+palpable=$1
+scenes=$2
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+cd "$work"
+fail=0
+check() {  # description, condition (a command)
+  if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi
+}
+
+"$palpable" run "$scenes/coins.json" --trace /dev/null --events /dev/null >/dev/null 2>&1
+check "--trace /dev/null: exit 0" "[[ $? -eq 0 ]]"
+check "/dev/null is still a character device" "[[ -c /dev/null ]]"
+
+echo old > target.csv
+ln -s target.csv link.csv
+"$palpable" run "$scenes/coins.json" --trace link.csv >/dev/null 2>&1
+check "a symlink given as --trace stays a symlink" "[[ -L link.csv ]]"
+check "its target holds the trace" "head -1 target.csv | grep -q '^t,body,x'"
+check "no temporary file left beside the target" "! ls target.csv.tmp-* >/dev/null 2>&1"
+
+"$palpable" run "$scenes/coins.json" --trace - 2>summary.txt >stdout.csv
+check "--trace - streams the CSV to stdout" "head -1 stdout.csv | grep -q '^t,body,x'"
+check "... and the summary goes to stderr" "grep -q '^scene' summary.txt"
+
+"$palpable" run "$scenes/coins.json" --trace same.csv --events same.csv >/dev/null 2>err.txt
+code=$?
+check "one file as --trace and --events: exit 2" "[[ $code -eq 2 ]]"
+check "... naming both options" "grep -q -- '--trace and --events' err.txt"
+check "... and nothing written" "[[ ! -e same.csv ]]"
+
+"$palpable" run "$scenes/ball_on_platter.json" --end 100000 --trace long.csv >/dev/null 2>&1 &
+pid=$!
+for _ in $(seq 50); do ls long.csv.tmp-* >/dev/null 2>&1 && break; sleep 0.1; done
+sleep 0.5
+kill -INT "$pid"
+wait "$pid"
+code=$?
+check "SIGINT during a run: exit 130" "[[ $code -eq 130 ]]"
+check "... no temporary file left" "! ls long.csv.tmp-* >/dev/null 2>&1"
+check "... and no partial trace" "[[ ! -e long.csv ]]"
+
+exit $fail
