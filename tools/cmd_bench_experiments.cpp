@@ -121,6 +121,7 @@ palpable::tools::CommandRegistration reg{
             palpable::tools::RunOptions options;
             options.scene_path = *folder + "/" + e.scene;
             options.overrides = {"/settings/contact_model=" + model};
+            options.keep_trace = false;
             std::vector<double> walls, cpus;
             palpable::SimulationStats first;
             nlohmann::json reference;

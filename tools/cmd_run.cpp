@@ -48,6 +48,7 @@ palpable::tools::CommandRegistration registration{
       return std::function<int()>([options, summary_path, end, end_option] {
         if (end_option->count() > 0) options->end_time = *end;
         options->progress = ::isatty(2) != 0;
+        options->keep_trace = false;  // memory flat in simulated time: stream, keep no history
         palpable::tools::check_distinct_outputs({{"--trace", options->trace_path},
                                                  {"--events", options->events_path},
                                                  {"--summary-json", *summary_path}});

@@ -46,4 +46,12 @@ check "SIGINT during a run: exit 130" "[[ $code -eq 130 ]]"
 check "... no temporary file left" "! ls long.csv.tmp-* >/dev/null 2>&1"
 check "... and no partial trace" "[[ ! -e long.csv ]]"
 
+# Memory independent of simulated time (no output file, no reference: nothing kept).
+if [[ -x /usr/bin/time ]]; then
+  short=$(/usr/bin/time -f %M "$palpable" run "$scenes/bowling.json" --end 5 2>&1 >/dev/null | tail -1)
+  long=$(/usr/bin/time -f %M "$palpable" run "$scenes/bowling.json" --end 500 2>&1 >/dev/null | tail -1)
+  echo "     peak memory of bowling: ${short} KB at 5 s, ${long} KB at 500 s"
+  check "peak memory at 500 s within 25 % of 5 s" "[[ $long -le $((short * 5 / 4)) ]]"
+fi
+
 exit $fail

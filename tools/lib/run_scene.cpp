@@ -26,8 +26,8 @@ void put_number(std::ostream& out, double x) {
 // streams collisions into the events CSV.
 class RunObserver : public SimulationObserver {
  public:
-  RunObserver(const World& world, AtomicFile* trace, AtomicFile* events, Trace* memory)
-      : trace_(trace), events_(events), memory_(memory) {
+  RunObserver(const World& world, AtomicFile* trace, AtomicFile* events, Trace* memory, bool keep)
+      : trace_(trace), events_(events), memory_(memory), keep_(keep) {
     for (const Body& b : world.bodies) names_.push_back(b.name);
     memory_->body_names = names_;
     if (trace_) trace_->stream() << kTraceHeader << "\n";
@@ -45,11 +45,12 @@ class RunObserver : public SimulationObserver {
       }
     }
     if (trace_) write_trace_rows(trace_->stream(), t, names_, states);
+    if (!keep_) return;
     memory_->times.push_back(t);
     memory_->samples.push_back(states);
   }
   void on_collision(const CollisionRecord& r) override {
-    memory_->contacts.push_back(ContactEvent{r.t, r.a.index, r.b.index, r.p_W});
+    if (keep_) memory_->contacts.push_back(ContactEvent{r.t, r.a.index, r.b.index, r.p_W});
     if (!events_) return;
     std::ostream& out = events_->stream();
     put_number(out, r.t);
@@ -86,6 +87,7 @@ class RunObserver : public SimulationObserver {
   AtomicFile* trace_;
   AtomicFile* events_;
   Trace* memory_;
+  bool keep_;  // samples and contacts kept in memory
 };
 
 }  // namespace
@@ -110,7 +112,8 @@ RunResult run_scene(const RunOptions& options) {
   std::unique_ptr<AtomicFile> trace_file, events_file;
   if (!options.trace_path.empty()) trace_file = std::make_unique<AtomicFile>(options.trace_path);
   if (!options.events_path.empty()) events_file = std::make_unique<AtomicFile>(options.events_path);
-  RunObserver observer(scene.world, trace_file.get(), events_file.get(), &result.trace);
+  RunObserver observer(scene.world, trace_file.get(), events_file.get(), &result.trace,
+                       options.keep_trace || !scene.reference.is_null());
 
   const auto wall_start = std::chrono::steady_clock::now();
   const std::clock_t cpu_start = std::clock();

@@ -23,6 +23,9 @@ struct RunOptions {
   bool progress = false;               // progress on stderr
   // Numerical trouble (see numerical_trouble) fails the run: it throws and writes no file.
   bool strict = false;
+  // Keep every sample and contact in RunResult::trace. Off, they are kept only when the scene's
+  // reference needs them, so memory does not grow with simulated time (the command line).
+  bool keep_trace = true;
 };
 
 struct RunResult {
@@ -30,7 +33,7 @@ struct RunResult {
   SimulationStats stats;
   double wall_time_s = 0.0;
   double cpu_time_s = 0.0;
-  Trace trace;               // the samples, in memory
+  Trace trace;               // the samples, in memory (see RunOptions::keep_trace)
   nlohmann::json reference;  // error figures against the scene's reference (null if none)
 };
 
