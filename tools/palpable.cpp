@@ -4,6 +4,7 @@
 #include "tools/commands.hpp"
 #include "tools/lib/atomic_file.hpp"
 #include "tools/lib/exit_codes.hpp"
+#include "tools/version.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -39,6 +40,7 @@ int main(int argc, char** argv) {
       "Exit codes: 0 success; 1 the run failed; 2 bad input (command line, scene, spec), nothing\n"
       "run; 3 the run finished but a requested check did not hold.\n",
       "palpable"};
+  app.set_version_flag("--version", std::string("palpable ") + kVersion + " (git " + kGitCommit + ")");
   app.require_subcommand(1);
   app.set_help_all_flag("--help-all", "Print help for every subcommand");
 

@@ -1,5 +1,7 @@
 #include "tools/lib/run_scene.hpp"
 
+#include "tools/version.hpp"
+
 #include "core/check.hpp"
 #include "scenarios/reference.hpp"
 #include "tools/lib/atomic_file.hpp"
@@ -208,6 +210,8 @@ nlohmann::json summary_json(const RunResult& r) {
                      {"max_pairs", s.max_pairs},
                      {"box_tests", s.box_tests}};
   const Settings& st = r.scene.world.settings;
+  j["palpable"] = {{"version", kVersion}, {"commit", kGitCommit}};
+  j["scene_path"] = r.scene.source;
   j["settings"] = settings_json(st, r.scene.world.gravity_W.norm());
   if (!r.reference.is_null()) {
     j["reference"] = r.reference;
