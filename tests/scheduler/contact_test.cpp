@@ -101,6 +101,47 @@ TEST_CASE("contact: a block rocking faster than the microcollision speed lands o
   CHECK(r.w1_W.y() != 5.0);  // the corner impulse turns the block
 }
 
+TEST_CASE("contact: a disk rolling on one facet of its rim is rolling, not resting flat",
+          "[contact]") {
+  // A 64-gon disk (R 2 cm, 2 mm thick) standing on one facet of its rim (a 2.0 mm by 2 mm
+  // patch), rolling along x at 24 rad/s: its centre moves at 0.48 m/s. The centre-of-pressure
+  // rule is for a face resting on a face; judged by the patch's own size (1.4 mm x 24 rad/s =
+  // 0.034 m/s, under the microcollision speed) it passed as resting and took the rolling away.
+  // A coin on the same facet spinning about the vertical is resting on it: the rule applies and
+  // keeps the spin.
+  const int n = 64;
+  const double R = 0.02, h = R * std::cos(kPi / n);
+  // Disk axis horizontal (body z to world -y), a facet centred straight down.
+  const Quat q = test::about(Vec3::UnitX(), kPi / 2) *
+                 test::about(Vec3::UnitZ(), -kPi / 2 - 47.5 * 2 * kPi / n);
+  auto disk = [&](const Vec3& v, const Vec3& w) {
+    return test::dynamic_body("disk", ConvexPolyhedron::prism(R, 0.001, n), 0.01,
+                              Vec3(0, 0, h + 2e-5), q, v, w);
+  };
+  {
+    const Posed rolling(disk(Vec3(24 * h, 0, -0.01), Vec3(0, 24, 0)), test::fixed_ground());
+    const Contact c = rolling.contact();
+    REQUIRE(c.patch.size() >= 3);
+    CHECK(c.placement == Placement::kPoint);
+    const Resolution r = rolling.resolve_it(Material{0.5, 0.0});
+    CHECK_FALSE(r.record.centre_of_pressure);
+    // Still rolling: the landing's friction at one point changes it by 0.3 % (measured); the
+    // rule, applied, removes every rotation in the contact plane, the rolling included.
+    CHECK(r.w1_W.y() > 23.5);
+  }
+  {
+    const Posed spinning(disk(Vec3(0, 0, -0.01), Vec3(0, 0, 20)), test::fixed_ground());
+    const Contact c = spinning.contact();
+    CHECK(c.placement == Placement::kFace);
+    const Resolution r = spinning.resolve_it(Material{0.5, 0.0});
+    CHECK(r.record.centre_of_pressure);
+    // The spin about the normal is kept, less the torsional friction of the patch over the
+    // landing impulse (0.6 % measured).
+    CHECK(r.w1_W.z() > 19.5);
+    CHECK(r.w1_W.head<2>().norm() < 1e-12);  // nothing in the plane
+  }
+}
+
 TEST_CASE("contact: a tall block sliding fast tips about its front edge", "[contact]") {
   // A 0.1 x 0.1 x 1 m column landing flat at 2 m/s forward: its centre of mass is 0.5 m up, so
   // the line of action of an impulse with mu = 0.5 meets the ground 0.25 m ahead of the foot,
