@@ -1,0 +1,111 @@
+"""Palpable from Python: impulse-based, event-driven rigid-body simulation.
+
+    import palpable
+    r = palpable.run("scenarios/block_on_ramp_decelerating.json", set={"/parameters/mu": 0.8})
+    r.t, r.states["block"], r.summary["reference"]        # numpy arrays and a dict
+
+Scenes are files or dicts (the palpable-scene/1 format); `set` applies the same JSON-pointer
+overrides as `palpable run --set`. Bad input raises palpable.InputError (a ValueError) naming the
+file and JSON pointer, as the command line does.
+"""
+import json
+import os
+import tempfile
+
+import numpy as np
+
+from ._palpable import InputError, Simulation as _Simulation, __version__, commit
+from . import _palpable
+
+__all__ = ["run", "impact", "sweep", "Simulation", "Result", "InputError", "__version__"]
+
+_COLUMNS = ["x", "y", "z", "qw", "qx", "qy", "qz", "vx", "vy", "vz", "wx", "wy", "wz"]
+
+
+def _overrides(set):
+    if not set:
+        return []
+    if isinstance(set, dict):
+        return ["%s=%s" % (k, json.dumps(v) if not isinstance(v, str) else v) for k, v in set.items()]
+    return list(set)
+
+
+class _SceneFile:
+    """A scene path, or a dict written to a temporary file for the run's duration."""
+
+    def __init__(self, scene):
+        self.scene, self.temp = scene, None
+
+    def __enter__(self):
+        if isinstance(self.scene, (str, os.PathLike)):
+            return os.fspath(self.scene)
+        fd, self.temp = tempfile.mkstemp(suffix=".json", prefix="palpable-scene-")
+        with os.fdopen(fd, "w") as f:
+            json.dump(self.scene, f)
+        return self.temp
+
+    def __exit__(self, *exc):
+        if self.temp:
+            os.unlink(self.temp)
+
+
+class Result:
+    """A run: t (samples), bodies, states[name] (samples x 13), summary (dict), contacts (an array
+    of collisions: t, body_a index, body_b index, px, py, pz)."""
+
+    def __init__(self, raw):
+        self.t = raw["t"]
+        self.bodies = list(raw["bodies"])
+        self._states = raw["states"]
+        self.states = {name: self._states[:, i, :] for i, name in enumerate(self.bodies)}
+        self.summary = raw["summary"]
+        self.contacts = raw["contacts"]
+        self.reference = self.summary.get("reference")
+
+    def frame(self):
+        """The trace as a pandas DataFrame (one row per body per sample), if pandas is present."""
+        import pandas as pd
+        n, m = len(self.t), len(self.bodies)
+        df = pd.DataFrame(self._states.reshape(n * m, 13), columns=_COLUMNS)
+        df.insert(0, "body", np.tile(self.bodies, n))
+        df.insert(0, "t", np.repeat(self.t, m))
+        return df
+
+
+def run(scene, set=None, end=None):
+    """Run a scene (path or dict) with overrides; returns a Result."""
+    with _SceneFile(scene) as path:
+        return Result(_palpable.run(path, _overrides(set), end))
+
+
+def impact(spec):
+    """Resolve one collision: the spec and the result of `palpable impact`, as dicts."""
+    return _palpable.impact(spec)
+
+
+def sweep(scene, vary, figure, set=None):
+    """Run every combination of `vary` ({pointer: [values]}) and apply `figure` (a callable on the
+    Result) to each; returns a list of (values dict, figure value)."""
+    import itertools
+    keys = list(vary)
+    rows = []
+    for combo in itertools.product(*(vary[k] for k in keys)):
+        overrides = dict(set or {})
+        overrides.update(zip(keys, combo))
+        rows.append((dict(zip(keys, combo)), figure(run(scene, set=overrides))))
+    return rows
+
+
+class Simulation:
+    """A simulation to step: run_until(t), step(t_end), state(body), time."""
+
+    def __init__(self, scene, set=None):
+        self._file = _SceneFile(scene)
+        path = self._file.__enter__()
+        try:
+            self._sim = _Simulation(path, _overrides(set))
+        finally:
+            self._file.__exit__(None, None, None)
+
+    def __getattr__(self, name):
+        return getattr(self._sim, name)
