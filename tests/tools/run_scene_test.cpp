@@ -238,3 +238,24 @@ TEST_CASE("a scene's reference follows --set: its closed form is the new scene's
   CHECK(off.reference["stop_time_error_s"].is_null());
   CHECK(off.reference["off_plane_max_m"].get<double>() > 0.02);  // off the end, falling
 }
+
+TEST_CASE("a trace says how it was made: a sidecar with version, scene hash, overrides, settings",
+          "[tools][run][provenance]") {
+  RunOptions options;
+  options.scene_path = scene("coins.json");
+  options.overrides = {"/settings/envelope=2e-4"};
+  options.trace_path = "run_scene_test_provenance.csv";
+  const RunResult r = run_scene(options);
+  std::ifstream in(options.trace_path + ".json");
+  REQUIRE(in);
+  const nlohmann::json side = nlohmann::json::parse(in);
+  CHECK(side == r.provenance);
+  CHECK(side["overrides"][0] == "/settings/envelope=2e-4");
+  CHECK(side["settings"]["envelope"] == 2e-4);
+  CHECK(side["settings"]["microcollision_speed"] == "auto");
+  CHECK(side["settings"]["derived"]["target_gap"] == 1e-4);
+  CHECK(side["scene_fnv1a64"].get<std::string>().size() == 16);
+  CHECK(palpable::tools::summary_json(r)["provenance"] == side);
+  std::remove(options.trace_path.c_str());
+  std::remove((options.trace_path + ".json").c_str());
+}

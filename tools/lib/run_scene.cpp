@@ -10,6 +10,9 @@
 #include <cmath>
 #include <ctime>
 #include <iomanip>
+#include <cstdint>
+#include <fstream>
+#include <cstdio>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -94,6 +97,37 @@ class RunObserver : public SimulationObserver {
 
 }  // namespace
 
+namespace {
+
+// FNV-1a, 64 bits, of a file's bytes, as 16 hex digits ("" for standard input).
+std::string text_hash(const std::string& path) {
+  if (path == "-") return "";
+  std::ifstream in(path, std::ios::binary);
+  std::uint64_t h = 14695981039346656037ull;
+  char c;
+  while (in.get(c)) {
+    h ^= static_cast<unsigned char>(c);
+    h *= 1099511628211ull;
+  }
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
+  return hex;
+}
+
+nlohmann::json provenance(const RunOptions& options, const Scene& scene) {
+  nlohmann::json p;
+  p["palpable"] = {{"version", kVersion}, {"commit", kGitCommit}};
+  p["scene_path"] = options.scene_path;
+  p["scene_fnv1a64"] = text_hash(options.scene_path);
+  p["overrides"] = options.overrides;
+  p["end_time_s"] = scene.end_time;
+  p["output_interval_s"] = scene.output_interval;
+  p["settings"] = settings_json(scene.world.settings, scene.world.gravity_W.norm());
+  return p;
+}
+
+}  // namespace
+
 RunResult run_scene(const RunOptions& options) {
   nlohmann::json document = read_json_file(options.scene_path);
   for (const std::string& assignment : options.overrides) apply_override(document, assignment);
@@ -161,8 +195,16 @@ RunResult run_scene(const RunOptions& options) {
                                " (no file written)");
     }
   }
+  result.provenance = provenance(options, result.scene);
+  // The sidecar is opened before the outputs are committed, so that all or none appear.
+  std::unique_ptr<AtomicFile> sidecar;
+  if (trace_file && !trace_file->streaming()) {
+    sidecar = std::make_unique<AtomicFile>(options.trace_path + ".json");
+    sidecar->stream() << result.provenance.dump(2) << "\n";
+  }
   if (trace_file) trace_file->commit();
   if (events_file) events_file->commit();
+  if (sidecar) sidecar->commit();
   return result;
 }
 
@@ -212,6 +254,7 @@ nlohmann::json summary_json(const RunResult& r) {
   const Settings& st = r.scene.world.settings;
   j["palpable"] = {{"version", kVersion}, {"commit", kGitCommit}};
   j["scene_path"] = r.scene.source;
+  j["provenance"] = r.provenance;
   j["settings"] = settings_json(st, r.scene.world.gravity_W.norm());
   if (!r.reference.is_null()) {
     j["reference"] = r.reference;

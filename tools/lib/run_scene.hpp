@@ -35,6 +35,10 @@ struct RunResult {
   double cpu_time_s = 0.0;
   Trace trace;               // the samples, in memory (see RunOptions::keep_trace)
   nlohmann::json reference;  // error figures against the scene's reference (null if none)
+  // How the run was made: palpable version and commit, scene path and the FNV-1a hash of its
+  // text, every override, the end time, and every setting in effect (derived ones included).
+  // In the summary JSON, and in a sidecar TRACE.json next to a trace file.
+  nlohmann::json provenance;
 };
 
 // Throws InputError for bad input (before anything runs; no file is written).
