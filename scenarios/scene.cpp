@@ -261,6 +261,53 @@ Body parse_body(const Reader& r, const json& value, const std::string& path) {
 
 }  // namespace
 
+// Ranges that depend on more than one value, checked before anything runs: a run that could
+// only hang, or silently throw bodies about, is bad input.
+void check_ranges(const Reader& r, const json& doc, const Scene& scene) {
+  const Settings& s = scene.world.settings;
+  double smallest = kInfinity, extent = 1.0;
+  for (const Body& b : scene.world.bodies) {
+    const double radius = b.shape ? max_radius(*b.shape) : 0.0;
+    if (std::isfinite(radius)) extent = std::max(extent, b.state.x_W.norm() + radius);
+    if (b.is_dynamic() && radius > 0.0) smallest = std::min(smallest, radius);
+  }
+  const json& settings = doc.contains("settings") ? doc["settings"] : json::object();
+  auto value = [&](const char* key) { return settings.contains(key) ? settings[key] : json(); };
+  // The envelope detects contact: larger than half the smallest dynamic body, a microcollision
+  // train throws it about; below the rounding of the scene's coordinates, the clock cannot move.
+  if (std::isfinite(smallest) && s.envelope_m > 0.5 * smallest) {
+    r.fail_value("/settings/envelope", value("envelope"),
+                 "at most half the smallest dynamic body's radius (" + std::to_string(0.5 * smallest) +
+                     " m)");
+  }
+  if (s.envelope_m < 1e-13 * extent) {
+    r.fail_value("/settings/envelope", value("envelope"),
+                 "at least 1e-13 of the scene's extent (" + std::to_string(1e-13 * extent) +
+                     " m): below it rounding of the positions decides contact");
+  }
+  if (s.microcollision_speed_mps && *s.microcollision_speed_mps > 100.0) {
+    r.fail_value("/settings/microcollision_speed", value("microcollision_speed"),
+                 "at most 100 m/s (every resting contact rebounds at it)");
+  }
+  if (s.broad_phase_horizon_s < 1e-9) {
+    r.fail_value("/settings/broad_phase_horizon", value("broad_phase_horizon"),
+                 "at least 1e-9 s (a body's swept box is refreshed every horizon)");
+  }
+  const double g = scene.world.gravity_W.norm();
+  if (g > 1e6) {
+    r.fail_value("/gravity", doc.value("gravity", json()), "a magnitude of at most 1e6 m/s^2");
+  }
+  if (scene.end_time > 1e9) {
+    r.fail_value("/end_time", doc["end_time"],
+                 "at most 1e9 s (the event clock resolves 1e-12 of the time)");
+  }
+  if (scene.output_interval > 0.0 && scene.end_time / scene.output_interval > 1e9) {
+    r.fail_value("/output/interval", doc["output"]["interval"],
+                 "at least end_time / 1e9 (" + std::to_string(scene.end_time / 1e9) +
+                     " s): more than 1e9 samples");
+  }
+}
+
 Scene scene_from_json(const json& document, const std::string& source) {
   // Scene parameters first: every "=expression" becomes its number.
   const json doc = expand_parameters(document, source);
@@ -345,6 +392,7 @@ Scene scene_from_json(const json& document, const std::string& source) {
     scene.reference = complete_reference(doc["reference"], source + ":/reference", scene.world);
     validate_reference(scene.reference, source + ":/reference", names, true);
   }
+  check_ranges(r, doc, scene);
   return scene;
 }
 
