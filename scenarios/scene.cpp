@@ -22,6 +22,13 @@ using nlohmann::json;
 
 using Reader = JsonReader;
 
+// Sizes a body's shape may have [m]: outside, masses and inertias leave the doubles' useful range
+// (a sphere of radius 1e-200 had mass NaN) or rounding swamps contact (an envelope cannot be set).
+constexpr double kMinSize = 1e-6;
+constexpr double kMaxSize = 1e6;
+constexpr double kMinAspect = 1e-6;  // thinnest over thickest dimension of a box
+constexpr const char* kSizeRange = "a size from 1e-6 to 1e6 m";
+
 std::shared_ptr<const Shape> parse_shape(const Reader& r, const json& value,
                                          const std::string& path, bool allow_unbounded) {
   r.object(value, path);
@@ -30,6 +37,9 @@ std::shared_ptr<const Shape> parse_shape(const Reader& r, const json& value,
     if (type == "sphere") {
       r.only_keys(value, path, {"type", "radius"});
       double radius = r.positive(r.required(value, path, "radius"), path + "/radius");
+      if (radius < kMinSize || radius > kMaxSize) {
+        r.fail_value(path + "/radius", value["radius"], kSizeRange);
+      }
       return std::make_shared<const Shape>(Sphere{radius});
     }
     if (type == "box") {
@@ -39,6 +49,11 @@ std::shared_ptr<const Shape> parse_shape(const Reader& r, const json& value,
         if (!(h[i] > 0.0)) {
           r.fail_value(path + "/half_extents/" + std::to_string(i), value["half_extents"][i],
                        "a positive half extent");
+        }
+        // A box 2e-200 m thick passed, then its first collision's inertia was not finite.
+        if (h[i] < kMinSize || h[i] > kMaxSize || h[i] < kMinAspect * h.maxCoeff()) {
+          r.fail_value(path + "/half_extents/" + std::to_string(i), value["half_extents"][i],
+                       std::string(kSizeRange) + ", and at least 1e-6 of the largest");
         }
       }
       return std::make_shared<const Shape>(ConvexPolyhedron::box(h));

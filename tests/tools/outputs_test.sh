@@ -46,6 +46,16 @@ check "SIGINT during a run: exit 130" "[[ $code -eq 130 ]]"
 check "... no temporary file left" "! ls long.csv.tmp-* >/dev/null 2>&1"
 check "... and no partial trace" "[[ ! -e long.csv ]]"
 
+# Sweep workers die with their parent (killed outright, no handler runs).
+"$palpable" sweep "$scenes/ball_on_platter.json" --vary /settings/envelope=1e-9,1e-9 --jobs 2 \
+    --out sweep.csv >/dev/null 2>&1 &
+pid=$!
+sleep 1
+kill -KILL "$pid"
+wait "$pid" 2>/dev/null
+sleep 0.5
+check "sweep workers stop when their parent is killed" "! pgrep -f 'ball_on_platter.json --vary /settings/envelope=1e-9,1e-9' >/dev/null"
+
 # Memory independent of simulated time (no output file, no reference: nothing kept).
 if [[ -x /usr/bin/time ]]; then
   short=$(/usr/bin/time -f %M "$palpable" run "$scenes/bowling.json" --end 5 2>&1 >/dev/null | tail -1)

@@ -8,6 +8,7 @@
 #include "tools/lib/plot.hpp"
 
 #include <poll.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -241,6 +242,11 @@ std::vector<json> run_forked(const SweepOptions& options, const std::vector<std:
         try {
           // Stopped by the parent with SIGTERM: die, whatever handler the parent installed.
           ::signal(SIGTERM, SIG_DFL);
+          ::signal(SIGINT, SIG_DFL);
+          ::signal(SIGHUP, SIG_DFL);
+          // A worker dies with its parent (killed, interrupted): it would otherwise run on.
+          ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+          if (::getppid() == 1) ::_exit(3);  // the parent died before prctl took effect
           ::close(fds[0]);
           // Invalid UTF-8 in a message (a scene string) is replaced, not thrown.
           const std::string text = run_combination_caught(options, indices[slot])
