@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 namespace palpable {
@@ -435,6 +436,13 @@ bool carries_riders(const Contact& c, const Settings& settings, const Vec3& grav
   return n_up.dot(-gravity_W.normalized()) > kSupportCosine;
 }
 
+// A number for a message, with the digits that matter (std::to_string prints 1e-9 as 0.000000).
+[[maybe_unused]] std::string significant(double x) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.3g", x);
+  return buffer;
+}
+
 Resolution resolve(Contact c, const ContactSide& side1, const ContactSide& side2,
                    const Material& material, const Settings& settings,
                    const std::vector<Rider>& riders, double t, const ResolveOptions& options) {
@@ -551,9 +559,9 @@ Resolution resolve(Contact c, const ContactSide& side1, const ContactSide& side2
       side1.body.motion == MotionKind::kKinematic || side2.body.motion == MotionKind::kKinematic;
   PALPABLE_DCHECK(settings.restitution_law == RestitutionLaw::kNewton || driven ||
                       record.energy_change <= out.energy_allowance,
-                  "a collision created energy: " + std::to_string(record.energy_change) +
-                      " J > allowance " + std::to_string(out.energy_allowance) +
-                      " J at t = " + std::to_string(t));
+                  "a collision created energy: " + significant(record.energy_change) +
+                      " J > allowance " + significant(out.energy_allowance) + " J at t = " +
+                      significant(t) + " (approach " + significant(-c.u_n) + " m/s)");
   return out;
 }
 
