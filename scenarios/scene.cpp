@@ -411,16 +411,30 @@ Scene scene_from_json(const json& document, const std::string& source) {
   return scene;
 }
 
-json read_json_file(const std::string& path) {
+std::string read_text_file(const std::string& path) {
   std::ostringstream text;
   if (path == "-") {
     text << std::cin.rdbuf();
   } else {
-    std::ifstream in(path);
+    std::ifstream in(path, std::ios::binary);
     if (!in) throw InputError(path, "cannot open file");
     text << in.rdbuf();
   }
-  return parse_json_text(text.str(), path);
+  return text.str();
+}
+
+json read_json_file(const std::string& path) {
+  return parse_json_text(read_text_file(path), path);
+}
+
+Scene load_scene(const std::string& path, const std::vector<std::string>& overrides,
+                 std::string* text) {
+  std::string bytes = read_text_file(path);
+  json document = parse_json_text(bytes, path);
+  for (const std::string& assignment : overrides) apply_override(document, assignment);
+  Scene scene = scene_from_json(document, path);
+  if (text) *text = std::move(bytes);
+  return scene;
 }
 
 void apply_override(json& doc, const std::string& assignment) {

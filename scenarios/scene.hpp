@@ -26,6 +26,13 @@ Scene scene_from_json(const nlohmann::json& document, const std::string& source)
 // Reads a JSON document from a file ("-": standard input). Throws InputError naming the file and,
 // for a syntax error, the byte position.
 nlohmann::json read_json_file(const std::string& path);
+// The bytes of a file ("-": standard input). Throws InputError naming the file.
+std::string read_text_file(const std::string& path);
+
+// A scene file read, overridden (--set assignments, in order) and parsed: what `palpable run`,
+// the viewer and the Python module all start from. `text`, if given, receives the file's bytes.
+Scene load_scene(const std::string& path, const std::vector<std::string>& overrides = {},
+                 std::string* text = nullptr);
 
 // Applies one "/json/pointer=value" override; value is parsed as JSON (a bare word that is not
 // JSON is taken as a string). The parent of the pointer must exist. Throws InputError.

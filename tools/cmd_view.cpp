@@ -81,7 +81,7 @@ struct ViewOptions {
 
 int make_view(const ViewOptions& o) {
   if (o.out.empty()) throw InputError("--out", "required: the HTML file to write");
-  const Scene scene = scene_from_json(read_json_file(o.scene), o.scene);
+  const Scene scene = load_scene(o.scene);
   Trace trace = read_trace_csv(o.trace);
   if (!o.events.empty()) read_events_csv(o.events, trace);
   if (trace.times.empty()) throw InputError(o.trace, "the trace has no samples");

@@ -29,7 +29,7 @@ json reference_spec(const ReferenceOptions& options) {
   if (!options.scene_path.empty()) {
     // Through the scene loader: the reference is validated and completed from the scene (its
     // derived parameters follow the scene's bodies and materials).
-    const Scene scene = scene_from_json(read_json_file(options.scene_path), options.scene_path);
+    const Scene scene = load_scene(options.scene_path);
     if (scene.reference.is_null()) {
       throw InputError(options.scene_path + ":/reference",
                        "the scene has no \"reference\" object (give --reference and --param)");

@@ -5,6 +5,7 @@
 #include "core/check.hpp"
 #include "scenarios/reference.hpp"
 #include "tools/lib/atomic_file.hpp"
+#include "tools/lib/fnv1a.hpp"
 
 #include <chrono>
 #include <cmath>
@@ -99,26 +100,12 @@ class RunObserver : public SimulationObserver {
 
 namespace {
 
-// FNV-1a, 64 bits, of a file's bytes, as 16 hex digits ("" for standard input).
-std::string text_hash(const std::string& path) {
-  if (path == "-") return "";
-  std::ifstream in(path, std::ios::binary);
-  std::uint64_t h = 14695981039346656037ull;
-  char c;
-  while (in.get(c)) {
-    h ^= static_cast<unsigned char>(c);
-    h *= 1099511628211ull;
-  }
-  char hex[17];
-  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
-  return hex;
-}
-
-nlohmann::json provenance(const RunOptions& options, const Scene& scene) {
+nlohmann::json provenance(const RunOptions& options, const Scene& scene,
+                          const std::string& scene_text) {
   nlohmann::json p;
   p["palpable"] = {{"version", kVersion}, {"commit", kGitCommit}};
   p["scene_path"] = options.scene_path;
-  p["scene_fnv1a64"] = text_hash(options.scene_path);
+  p["scene_fnv1a64"] = fnv1a64_hex(scene_text);
   p["overrides"] = options.overrides;
   p["end_time_s"] = scene.end_time;
   p["output_interval_s"] = scene.output_interval;
@@ -129,10 +116,9 @@ nlohmann::json provenance(const RunOptions& options, const Scene& scene) {
 }  // namespace
 
 RunResult run_scene(const RunOptions& options) {
-  nlohmann::json document = read_json_file(options.scene_path);
-  for (const std::string& assignment : options.overrides) apply_override(document, assignment);
   RunResult result;
-  result.scene = scene_from_json(document, options.scene_path);
+  std::string scene_text;
+  result.scene = load_scene(options.scene_path, options.overrides, &scene_text);
   if (options.end_time) {
     if (!(*options.end_time > 0.0) || !std::isfinite(*options.end_time)) {
       throw InputError("--end", "expected a positive number of seconds");
@@ -195,7 +181,7 @@ RunResult run_scene(const RunOptions& options) {
                                " (no file written)");
     }
   }
-  result.provenance = provenance(options, result.scene);
+  result.provenance = provenance(options, result.scene, scene_text);
   // The sidecar is opened before the outputs are committed, so that all or none appear.
   std::unique_ptr<AtomicFile> sidecar;
   if (trace_file && !trace_file->streaming()) {

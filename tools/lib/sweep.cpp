@@ -4,6 +4,7 @@
 
 #include "core/check.hpp"
 #include "scenarios/scene.hpp"
+#include "tools/lib/fnv1a.hpp"
 #include "tools/lib/median.hpp"
 #include "tools/lib/plot.hpp"
 
@@ -442,15 +443,7 @@ std::string sweep_fingerprint(const SweepOptions& options) {
     text += "vary=" + p.pointer + "\n";
     for (const std::string& value : p.values) text += "value=" + value + "\n";
   }
-  // FNV-1a, 64 bits (Fowler, Noll, Vo): deterministic on every platform.
-  std::uint64_t hash = 14695981039346656037ull;
-  for (unsigned char c : text) {
-    hash ^= c;
-    hash *= 1099511628211ull;
-  }
-  char hex[17];
-  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(hash));
-  return hex;
+  return fnv1a64_hex(text);
 }
 
 SweepTable run_sweep(const SweepOptions& options) {

@@ -87,9 +87,7 @@ py::dict run(const std::string& path, const std::vector<std::string>& overrides,
 class PySimulation {
  public:
   PySimulation(const std::string& path, const std::vector<std::string>& overrides) {
-    nlohmann::json doc = read_json_file(path);
-    for (const std::string& a : overrides) apply_override(doc, a);
-    scene_ = std::make_unique<Scene>(scene_from_json(doc, path));
+    scene_ = std::make_unique<Scene>(load_scene(path, overrides));
     sim_ = std::make_unique<Simulation>(scene_->world, SimulationOptions{});
   }
   double time() const { return sim_->time(); }
