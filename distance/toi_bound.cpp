@@ -227,17 +227,17 @@ bool exact_sphere_plane(const Body& sphere_body, const BodyState& s, double radi
 // at ω̄ ρ: a box rocking on an edge, or spinning flat, is bounded by what its corners do.
 // Returns the least time over the vertices (the same branches as toi_bound), or -1 if the pair is
 // not of this kind.
+// `w_bar`: the body's angular-speed bound ω̄ (its ToiMotion's, already computed).
 double vertex_bound_above_plane(const Body& body, const BodyState& s, const ShapeGeometry& g,
-                                const Body& plane_body, const BodyState& p,
+                                double w_bar, const Body& plane_body, const BodyState& p,
                                 const ShapeGeometry::Piece& half, const Vec3& gravity_W,
-                                double d_target, const Settings& settings) {
+                                double d_target) {
   if (!body.is_dynamic() || plane_body.motion != MotionKind::kFixed) return -1.0;
   for (const ShapeGeometry::Piece& piece : g.pieces()) {
     if (piece.kind != ShapeGeometry::PieceKind::kPolyhedron || !piece.mesh) return -1.0;
   }
   const Vec3 n = p.q_WM * half.normal_M;
   const double offset = half.offset + n.dot(p.x_W);
-  const double w_bar = angular_speed_bound(body, s, settings);
   const Vec3& I = body.mass.principal_moments;
   const double alpha_bar = I.minCoeff() > 0.0
                                ? w_bar * w_bar * (I.maxCoeff() - I.minCoeff()) / I.minCoeff()
@@ -294,18 +294,18 @@ ToiBound single_time_of_impact(const Body& body1, const BodyState& state1,
   const ToiMotion m2 =
       toi_motion(body2, state2, geometry2, gravity_W, state1.x_W, geometry1.reach(), settings);
   ToiBound bound = toi_bound(m1, m2, closest, d_target, settings);
-  // Both are lower bounds on the same instant: the larger is too.
+  // Only where the rotational term would storm (a floored bound: the vertex pass costs a walk
+  // over the vertices) and the pair is apart (overlapping or failed: check now stands). Both are
+  // lower bounds on the same instant: the larger is too.
+  const bool apart =
+      closest.status == ContactStatus::kSeparated || closest.status == ContactStatus::kTouching;
   double by_vertices = -1.0;
-  if (!bound.floored ||
-      (closest.status != ContactStatus::kSeparated && closest.status != ContactStatus::kTouching)) {
-    // Only where the rotational term would storm (a floored bound: it costs a pass over the
-    // vertices). Overlapping or failed: toi_bound's answer (check now) stands.
-  } else if (halfspace(geometry2)) {
-    by_vertices = vertex_bound_above_plane(body1, state1, geometry1, body2, state2,
-                                           *halfspace(geometry2), gravity_W, d_target, settings);
-  } else if (halfspace(geometry1)) {
-    by_vertices = vertex_bound_above_plane(body2, state2, geometry2, body1, state1,
-                                           *halfspace(geometry1), gravity_W, d_target, settings);
+  if (bound.floored && apart && halfspace(geometry2)) {
+    by_vertices = vertex_bound_above_plane(body1, state1, geometry1, m1.omega_bound, body2, state2,
+                                           *halfspace(geometry2), gravity_W, d_target);
+  } else if (bound.floored && apart && halfspace(geometry1)) {
+    by_vertices = vertex_bound_above_plane(body2, state2, geometry2, m2.omega_bound, body1, state1,
+                                           *halfspace(geometry1), gravity_W, d_target);
   }
   if (by_vertices > bound.dt) {
     bound.dt = by_vertices;

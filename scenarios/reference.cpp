@@ -77,22 +77,27 @@ const std::map<std::string, std::map<std::string, Parameter>>& reference_paramet
   return table;
 }
 
-// Reads one parameter of a validated spec (validate_reference has checked its kind).
+// Reads one parameter of a spec through the project's JSON reader (errors name where + key).
 double spec_number(const json& spec, const std::string& where, const std::string& key) {
-  return JsonReader(where, "").number(JsonReader(where, "").required(spec, "", key), "/" + key);
+  const JsonReader r(where, "");
+  return r.number(r.required(spec, "", key), "/" + key);
 }
 
+// A direction, normalised.
 Vec3 spec_vec3(const json& spec, const std::string& where, const std::string& key) {
-  return JsonReader(where, "").direction(JsonReader(where, "").required(spec, "", key), "/" + key);
+  const JsonReader r(where, "");
+  return r.direction(r.required(spec, "", key), "/" + key);
 }
 
 // A vector parameter, any length (a velocity).
 Vec3 spec_vector(const json& spec, const std::string& where, const std::string& key) {
-  return JsonReader(where, "").vec3(JsonReader(where, "").required(spec, "", key), "/" + key);
+  const JsonReader r(where, "");
+  return r.vec3(r.required(spec, "", key), "/" + key);
 }
 
 std::string spec_string(const json& spec, const std::string& where, const std::string& key) {
-  return JsonReader(where, "").string(JsonReader(where, "").required(spec, "", key), "/" + key);
+  const JsonReader r(where, "");
+  return r.string(r.required(spec, "", key), "/" + key);
 }
 
 json compare_incline(const json& spec, const Trace& trace, const std::string& where) {
