@@ -1,8 +1,8 @@
 // `palpable view`: one self-contained HTML page that plays a run in 3-D in the browser — every
 // body's real shape from the scene, the trace's motion (downsampled to the display rate), the
 // collisions from the events as arrows at their instants — with three.js from Debian's libjs-three
-// inlined (no network, no server). The page is tools/view/viewer.html; its data is written into
-// it as JSON.
+// inlined (no network, no server). The page is tools/view/viewer.html, compiled in; its data is
+// written into it as JSON.
 #include "core/check.hpp"
 #include "core/shape.hpp"
 #include "scenarios/json_reader.hpp"
@@ -11,19 +11,16 @@
 #include "tools/commands.hpp"
 #include "tools/lib/atomic_file.hpp"
 #include "tools/lib/exit_codes.hpp"
+#include "tools/viewer_page.hpp"
 
 #include <nlohmann/json.hpp>
 
 #include <cmath>
-#include <fstream>
 #include <iostream>
 #include <memory>
-#include <sstream>
 #include <string>
 
-#ifndef PALPABLE_SOURCE_DIR
-#define PALPABLE_SOURCE_DIR "."
-#endif
+#include <unistd.h>
 
 namespace palpable::tools {
 namespace {
@@ -66,14 +63,6 @@ json shape_json(const Shape& shape) {
   return {{"type", "group"}, {"parts", parts}};
 }
 
-std::string read_text(const std::string& path, const std::string& what) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, "cannot open " + what);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 struct ViewOptions {
   std::string trace, scene, events, out, three = "/usr/share/javascript/three/three.min.js";
   double fps = 60.0;
@@ -85,8 +74,12 @@ int make_view(const ViewOptions& o) {
   Trace trace = read_trace_csv(o.trace);
   if (!o.events.empty()) read_events_csv(o.events, trace);
   if (trace.times.empty()) throw InputError(o.trace, "the trace has no samples");
-  const std::string three = read_text(o.three, "three.js (install the Debian package libjs-three; tools/setup does)");
-  const std::string page = read_text(std::string(PALPABLE_SOURCE_DIR) + "/tools/view/viewer.html", "the page template");
+  if (::access(o.three.c_str(), R_OK) != 0) {
+    throw InputError(o.three, "cannot read three.js: install the Debian package libjs-three "
+                              "(tools/setup does)");
+  }
+  const std::string three = read_text_file(o.three);
+  const std::string page = kViewerPage;
 
   json data;
   data["scene"] = scene.name;
