@@ -19,6 +19,16 @@ function(palpable_module name dir)
   if(name MATCHES "^palpable_(core|distance|impulse|scheduler|scenarios)$")
     file(RELATIVE_PATH _module ${PROJECT_SOURCE_DIR} ${dir})
     install(TARGETS ${name} EXPORT palpableTargets ARCHIVE DESTINATION lib)
+    # What the build applies to everything (add_compile_definitions, add_link_options) must reach
+    # a program built against the installed package too: a sanitized library links only with the
+    # sanitizer runtimes, and a checked build's inline PALPABLE_DCHECKs must mean the same in
+    # the program as in the library.
+    if(PALPABLE_SANITIZE)
+      target_link_options(${name} INTERFACE $<INSTALL_INTERFACE:-fsanitize=address,undefined>)
+    endif()
+    if(PALPABLE_CHECKED)
+      target_compile_definitions(${name} INTERFACE $<INSTALL_INTERFACE:PALPABLE_CHECKED=1>)
+    endif()
     install(FILES ${_headers} DESTINATION include/palpable/${_module})
   endif()
 endfunction()
