@@ -56,6 +56,24 @@ wait "$pid" 2>/dev/null
 sleep 0.5
 check "sweep workers stop when their parent is killed" "! pgrep -f 'ball_on_platter.json --vary /settings/envelope=1e-9,1e-9' >/dev/null"
 
+# plot --out: a device stays a device, a link stays a link (its target gets the PNG), a directory
+# is refused without leaving a temporary PNG beside it.
+if command -v gnuplot >/dev/null; then
+  "$palpable" run "$scenes/coins.json" --trace c.csv >/dev/null 2>&1
+  "$palpable" plot c.csv --body coin0 --out /dev/null >/dev/null 2>&1
+  check "plot --out /dev/null: exit 0" "[[ $? -eq 0 ]]"
+  check "... /dev/null is still a character device" "[[ -c /dev/null ]]"
+  echo old > target.png
+  ln -s target.png link.png
+  "$palpable" plot c.csv --body coin0 --out link.png >/dev/null 2>&1
+  check "plot --out LINK: the link stays a link" "[[ -L link.png ]]"
+  check "... and its target holds a PNG" "head -c 4 target.png | grep -q PNG"
+  mkdir outdir
+  "$palpable" plot c.csv --body coin0 --out outdir >/dev/null 2>&1
+  check "plot --out DIR: an error" "[[ $? -ne 0 ]]"
+  check "... no temporary PNG left" "! ls outdir.tmp-* outdir/* >/dev/null 2>&1"
+fi
+
 # Memory independent of simulated time (no output file, no reference: nothing kept).
 if [[ -x /usr/bin/time ]]; then
   short=$(/usr/bin/time -f %M "$palpable" run "$scenes/bowling.json" --end 5 2>&1 >/dev/null | tail -1)
