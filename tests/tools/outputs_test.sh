@@ -35,6 +35,24 @@ check "one file as --trace and --events: exit 2" "[[ $code -eq 2 ]]"
 check "... naming both options" "grep -q -- '--trace and --events' err.txt"
 check "... and nothing written" "[[ ! -e same.csv ]]"
 
+"$palpable" run "$scenes/coins.json" --trace t.csv --summary-json t.csv >/dev/null 2>err.txt
+code=$?
+check "one file as --trace and --summary-json: exit 2" "[[ $code -eq 2 ]]"
+check "... naming both options" "grep -q -- '--trace and --summary-json' err.txt"
+check "... and nothing written" "[[ ! -e t.csv ]]"
+
+"$palpable" run "$scenes/coins.json" --trace t.csv --summary-json t.csv.json >/dev/null 2>err.txt
+code=$?
+check "--summary-json on the trace's sidecar (TRACE.json): exit 2" "[[ $code -eq 2 ]]"
+check "... naming both" "grep -q -- '--summary-json and the --trace sidecar' err.txt"
+check "... and nothing written" "[[ ! -e t.csv && ! -e t.csv.json ]]"
+
+"$palpable" sweep "$scenes/coins.json" --vary /settings/envelope=1e-6 --out s.csv --plot s.csv \
+    >/dev/null 2>err.txt
+code=$?
+check "sweep --out and --plot one file: exit 2" "[[ $code -eq 2 ]]"
+check "... naming both options" "grep -q -- '--out and --plot' err.txt"
+
 "$palpable" run "$scenes/ball_on_platter.json" --end 100000 --trace long.csv >/dev/null 2>&1 &
 pid=$!
 for _ in $(seq 50); do ls long.csv.tmp-* >/dev/null 2>&1 && break; sleep 0.1; done

@@ -51,6 +51,12 @@ bool is_special(const struct stat& st) {
 
 }  // namespace
 
+bool writes_through(const std::string& path) {
+  if (path == "-") return true;
+  struct stat st {};
+  return ::stat(path.c_str(), &st) == 0 && is_special(st);
+}
+
 AtomicFile::AtomicFile(std::string path) : path_(std::move(path)), final_path_(path_) {
   if (path_ == "-") {
     target_ = &std::cout;
