@@ -64,6 +64,37 @@ check "SIGINT during a run: exit 130" "[[ $code -eq 130 ]]"
 check "... no temporary file left" "! ls long.csv.tmp-* >/dev/null 2>&1"
 check "... and no partial trace" "[[ ! -e long.csv ]]"
 
+# Each of SIGINT, SIGTERM and SIGHUP, two seconds into a long bowling run: exit 128 + signal, and
+# neither the temporary file nor a partial trace (nor its sidecar) is left. (--end 500 finishes in
+# about 2 s here, too close to the signal: 1e5 s cannot finish first.)
+for sig in INT:130 TERM:143 HUP:129; do
+  name=${sig%%:*}
+  want=${sig##*:}
+  "$palpable" run "$scenes/bowling.json" --end 100000 --trace T.csv >/dev/null 2>&1 &
+  pid=$!
+  sleep 2
+  check "... (the run was writing T.csv.tmp-$pid when signalled)" "[[ -e T.csv.tmp-$pid ]]"
+  kill -"$name" "$pid"
+  wait "$pid"
+  code=$?
+  check "SIG$name 2 s into bowling --end 100000: exit $want" "[[ $code -eq $want ]]"
+  check "... no T.csv.tmp-* left" "! ls T.csv.tmp-* >/dev/null 2>&1"
+  check "... no partial trace" "[[ ! -e T.csv && ! -e T.csv.json ]]"
+done
+
+# A sweep interrupted: exit 130, and its workers stop with it.
+"$palpable" sweep "$scenes/ball_on_platter.json" --vary /settings/envelope=2e-9,2e-9 --jobs 2 \
+    --out sweep.csv >/dev/null 2>&1 &
+pid=$!
+sleep 1
+kill -INT "$pid"
+wait "$pid"
+code=$?
+sleep 0.5
+check "SIGINT during a sweep: exit 130" "[[ $code -eq 130 ]]"
+check "... its workers stop" "! pgrep -f 'ball_on_platter.json --vary /settings/envelope=2e-9,2e-9' >/dev/null"
+check "... no sweep.csv nor temporary" "! ls sweep.csv* >/dev/null 2>&1"
+
 # Sweep workers die with their parent (killed outright, no handler runs).
 "$palpable" sweep "$scenes/ball_on_platter.json" --vary /settings/envelope=1e-9,1e-9 --jobs 2 \
     --out sweep.csv >/dev/null 2>&1 &

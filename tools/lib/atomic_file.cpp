@@ -2,6 +2,7 @@
 
 #include "core/check.hpp"
 
+#include <atomic>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
@@ -26,6 +27,8 @@ int register_temp(const std::string& path) {
   for (int i = 0; i < kMaxTemps; ++i) {
     if (!g_live[i]) {
       std::memcpy(g_temps[i], path.c_str(), path.size() + 1);
+      // The handler must see the whole path before it sees the slot live.
+      std::atomic_signal_fence(std::memory_order_seq_cst);
       g_live[i] = 1;
       return i;
     }
