@@ -43,7 +43,8 @@ palpable::tools::CommandRegistration registration{
       return std::function<int()>([options, kind] {
         options->kind = palpable::tools::parse_plot_kind(*kind);
         palpable::tools::plot_trace(*options);
-        std::cout << "wrote " << options->out_path << "\n";
+        // With the PNG on standard output, the note goes to stderr.
+        (options->out_path == "-" ? std::cerr : std::cout) << "wrote " << options->out_path << "\n";
         return palpable::tools::kExitOk;
       });
     }};

@@ -7,6 +7,9 @@
 
 #include <iostream>
 #include <memory>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include <unistd.h>
 
@@ -49,9 +52,15 @@ palpable::tools::CommandRegistration registration{
         if (end_option->count() > 0) options->end_time = *end;
         options->progress = ::isatty(2) != 0;
         options->keep_trace = false;  // memory flat in simulated time: stream, keep no history
-        palpable::tools::check_distinct_outputs({{"--trace", options->trace_path},
-                                                 {"--events", options->events_path},
-                                                 {"--summary-json", *summary_path}});
+        std::vector<std::pair<std::string, std::string>> outputs = {
+            {"--trace", options->trace_path},
+            {"--events", options->events_path},
+            {"--summary-json", *summary_path}};
+        // A trace written to a file gets a sidecar, TRACE.json: a fourth output.
+        if (!options->trace_path.empty() && !palpable::tools::writes_through(options->trace_path)) {
+          outputs.push_back({"the --trace sidecar", options->trace_path + ".json"});
+        }
+        palpable::tools::check_distinct_outputs(outputs);
         // Opened before the run, so that an unwritable summary fails before any output is made.
         std::unique_ptr<palpable::tools::AtomicFile> summary_file;
         if (!summary_path->empty()) {

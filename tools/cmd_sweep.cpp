@@ -30,6 +30,7 @@ int run(SweepCommand& c) {
   if (c.merge.empty() && c.scene.empty()) {
     throw palpable::InputError("scene", "required: the scene file to sweep (or --merge)");
   }
+  check_distinct_outputs({{"--out", c.out_path}, {"--plot", c.plot_path}});
   // Before the sweep runs, not after: a missing gnuplot costs nothing.
   if (!c.plot_path.empty()) require_gnuplot();
   SweepTable table;

@@ -35,6 +35,24 @@ check "one file as --trace and --events: exit 2" "[[ $code -eq 2 ]]"
 check "... naming both options" "grep -q -- '--trace and --events' err.txt"
 check "... and nothing written" "[[ ! -e same.csv ]]"
 
+"$palpable" run "$scenes/coins.json" --trace t.csv --summary-json t.csv >/dev/null 2>err.txt
+code=$?
+check "one file as --trace and --summary-json: exit 2" "[[ $code -eq 2 ]]"
+check "... naming both options" "grep -q -- '--trace and --summary-json' err.txt"
+check "... and nothing written" "[[ ! -e t.csv ]]"
+
+"$palpable" run "$scenes/coins.json" --trace t.csv --summary-json t.csv.json >/dev/null 2>err.txt
+code=$?
+check "--summary-json on the trace's sidecar (TRACE.json): exit 2" "[[ $code -eq 2 ]]"
+check "... naming both" "grep -q -- '--summary-json and the --trace sidecar' err.txt"
+check "... and nothing written" "[[ ! -e t.csv && ! -e t.csv.json ]]"
+
+"$palpable" sweep "$scenes/coins.json" --vary /settings/envelope=1e-6 --out s.csv --plot s.csv \
+    >/dev/null 2>err.txt
+code=$?
+check "sweep --out and --plot one file: exit 2" "[[ $code -eq 2 ]]"
+check "... naming both options" "grep -q -- '--out and --plot' err.txt"
+
 "$palpable" run "$scenes/ball_on_platter.json" --end 100000 --trace long.csv >/dev/null 2>&1 &
 pid=$!
 for _ in $(seq 50); do ls long.csv.tmp-* >/dev/null 2>&1 && break; sleep 0.1; done
@@ -46,6 +64,37 @@ check "SIGINT during a run: exit 130" "[[ $code -eq 130 ]]"
 check "... no temporary file left" "! ls long.csv.tmp-* >/dev/null 2>&1"
 check "... and no partial trace" "[[ ! -e long.csv ]]"
 
+# Each of SIGINT, SIGTERM and SIGHUP, two seconds into a long bowling run: exit 128 + signal, and
+# neither the temporary file nor a partial trace (nor its sidecar) is left. (--end 500 finishes in
+# about 2 s here, too close to the signal: 1e5 s cannot finish first.)
+for sig in INT:130 TERM:143 HUP:129; do
+  name=${sig%%:*}
+  want=${sig##*:}
+  "$palpable" run "$scenes/bowling.json" --end 100000 --trace T.csv >/dev/null 2>&1 &
+  pid=$!
+  sleep 2
+  check "... (the run was writing T.csv.tmp-$pid when signalled)" "[[ -e T.csv.tmp-$pid ]]"
+  kill -"$name" "$pid"
+  wait "$pid"
+  code=$?
+  check "SIG$name 2 s into bowling --end 100000: exit $want" "[[ $code -eq $want ]]"
+  check "... no T.csv.tmp-* left" "! ls T.csv.tmp-* >/dev/null 2>&1"
+  check "... no partial trace" "[[ ! -e T.csv && ! -e T.csv.json ]]"
+done
+
+# A sweep interrupted: exit 130, and its workers stop with it.
+"$palpable" sweep "$scenes/ball_on_platter.json" --vary /settings/envelope=2e-9,2e-9 --jobs 2 \
+    --out sweep.csv >/dev/null 2>&1 &
+pid=$!
+sleep 1
+kill -INT "$pid"
+wait "$pid"
+code=$?
+sleep 0.5
+check "SIGINT during a sweep: exit 130" "[[ $code -eq 130 ]]"
+check "... its workers stop" "! pgrep -f 'ball_on_platter.json --vary /settings/envelope=2e-9,2e-9' >/dev/null"
+check "... no sweep.csv nor temporary" "! ls sweep.csv* >/dev/null 2>&1"
+
 # Sweep workers die with their parent (killed outright, no handler runs).
 "$palpable" sweep "$scenes/ball_on_platter.json" --vary /settings/envelope=1e-9,1e-9 --jobs 2 \
     --out sweep.csv >/dev/null 2>&1 &
@@ -55,6 +104,24 @@ kill -KILL "$pid"
 wait "$pid" 2>/dev/null
 sleep 0.5
 check "sweep workers stop when their parent is killed" "! pgrep -f 'ball_on_platter.json --vary /settings/envelope=1e-9,1e-9' >/dev/null"
+
+# plot --out: a device stays a device, a link stays a link (its target gets the PNG), a directory
+# is refused without leaving a temporary PNG beside it.
+if command -v gnuplot >/dev/null; then
+  "$palpable" run "$scenes/coins.json" --trace c.csv >/dev/null 2>&1
+  "$palpable" plot c.csv --body coin0 --out /dev/null >/dev/null 2>&1
+  check "plot --out /dev/null: exit 0" "[[ $? -eq 0 ]]"
+  check "... /dev/null is still a character device" "[[ -c /dev/null ]]"
+  echo old > target.png
+  ln -s target.png link.png
+  "$palpable" plot c.csv --body coin0 --out link.png >/dev/null 2>&1
+  check "plot --out LINK: the link stays a link" "[[ -L link.png ]]"
+  check "... and its target holds a PNG" "head -c 4 target.png | grep -q PNG"
+  mkdir outdir
+  "$palpable" plot c.csv --body coin0 --out outdir >/dev/null 2>&1
+  check "plot --out DIR: an error" "[[ $? -ne 0 ]]"
+  check "... no temporary PNG left" "! ls outdir.tmp-* outdir/* >/dev/null 2>&1"
+fi
 
 # Memory independent of simulated time (no output file, no reference: nothing kept).
 if [[ -x /usr/bin/time ]]; then

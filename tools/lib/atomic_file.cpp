@@ -2,6 +2,7 @@
 
 #include "core/check.hpp"
 
+#include <atomic>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
@@ -26,6 +27,8 @@ int register_temp(const std::string& path) {
   for (int i = 0; i < kMaxTemps; ++i) {
     if (!g_live[i]) {
       std::memcpy(g_temps[i], path.c_str(), path.size() + 1);
+      // The handler must see the whole path before it sees the slot live.
+      std::atomic_signal_fence(std::memory_order_seq_cst);
       g_live[i] = 1;
       return i;
     }
@@ -50,6 +53,12 @@ bool is_special(const struct stat& st) {
 }
 
 }  // namespace
+
+bool writes_through(const std::string& path) {
+  if (path == "-") return true;
+  struct stat st {};
+  return ::stat(path.c_str(), &st) == 0 && is_special(st);
+}
 
 AtomicFile::AtomicFile(std::string path) : path_(std::move(path)), final_path_(path_) {
   if (path_ == "-") {

@@ -39,6 +39,10 @@ class AtomicFile {
   int slot_ = -1;  // in the signal handler's table of live temporaries
 };
 
+// True when AtomicFile(path) would write straight through: "-", or a path that is (or links to) a
+// device, FIFO or socket.
+bool writes_through(const std::string& path);
+
 // Installs handlers for SIGINT, SIGTERM and SIGHUP that remove every live temporary file of an
 // AtomicFile and exit with 128 + the signal number (the shell's convention: 130 for SIGINT).
 void install_output_cleanup_on_signals();

@@ -1,5 +1,7 @@
 #include "tools/lib/plot.hpp"
 
+#include "tools/lib/atomic_file.hpp"
+
 #include "scenarios/reference.hpp"
 
 #include "core/check.hpp"
@@ -311,12 +313,14 @@ std::string require_gnuplot(const std::string& name) {
 }
 
 namespace {
-// Writes the script into dir, runs gnuplot on it and renames the PNG over `out_path` only when
-// gnuplot succeeded.
+// Writes the script into dir, runs gnuplot on it into a PNG inside dir, and writes that PNG to
+// `out_path` through an AtomicFile only when gnuplot succeeded: a regular file is replaced
+// atomically, a device or a symlink's target is written through, and nothing is ever left beside
+// `out_path` (not even when it names a directory, or on a signal).
 void render(const std::string& program, const TempDir& dir, const std::string& script, int height,
             const std::string& out_path) {
-  const fs::path out = fs::absolute(out_path);
-  const fs::path temp_png = out.string() + ".tmp-" + std::to_string(::getpid()) + ".png";
+  AtomicFile out(out_path);  // opened first: an unwritable path fails before gnuplot runs
+  const fs::path temp_png = fs::absolute(dir.path() / "out.png");
   {
     std::ofstream gp(dir.path() / "plot.gp");
     gp << terminal(height) << "set encoding utf8\nset output " << quoted(temp_png.string()) << "\n"
@@ -329,10 +333,11 @@ void render(const std::string& program, const TempDir& dir, const std::string& s
   std::string messages((std::istreambuf_iterator<char>(log_in)), std::istreambuf_iterator<char>());
   std::error_code ignored;
   if (status != 0 || !fs::exists(temp_png) || fs::file_size(temp_png, ignored) == 0) {
-    fs::remove(temp_png, ignored);
     throw std::runtime_error("gnuplot failed (status " + std::to_string(status) + "): " + messages);
   }
-  fs::rename(temp_png, out);
+  std::ifstream png(temp_png, std::ios::binary);
+  out.stream() << png.rdbuf();
+  out.commit();
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 // impact. Errors in the input arrive as palpable.InputError (a ValueError) carrying the same
 // file / JSON-pointer message as the command line.
 #include "core/check.hpp"
+#include "scenarios/json_reader.hpp"
 #include "scenarios/scene.hpp"
 #include "scheduler/simulation.hpp"
 #include "tools/lib/impact_spec.hpp"
@@ -26,8 +27,10 @@ py::object to_python(const nlohmann::json& j) {
   return py::module_::import("json").attr("loads")(j.dump());
 }
 
-nlohmann::json from_python(const py::object& o) {
-  return nlohmann::json::parse(py::module_::import("json").attr("dumps")(o).cast<std::string>());
+// Through the one JSON reader: its depth and size limits hold here too, and a value it cannot
+// read (NaN, inf) is an InputError, not nlohmann's parse error.
+nlohmann::json from_python(const py::object& o, const std::string& where) {
+  return parse_json_text(py::module_::import("json").attr("dumps")(o).cast<std::string>(), where);
 }
 
 // A trace as numpy: t (samples), states (samples x bodies x 13: x y z qw qx qy qz vx vy vz wx wy wz).
@@ -151,7 +154,7 @@ PYBIND11_MODULE(_palpable, m) {
   m.def(
       "impact",
       [](const py::object& spec) {
-        const tools::ImpactSpec s = tools::parse_impact_spec(from_python(spec));
+        const tools::ImpactSpec s = tools::parse_impact_spec(from_python(spec, "spec"));
         return to_python(tools::resolve_impact(s));
       },
       py::arg("spec"), "Resolve one collision; the same spec and result as `palpable impact`.");

@@ -1,4 +1,5 @@
 """The Python module, as a user runs it (pytest; part of tools/run-tests)."""
+import json
 import math
 import os
 
@@ -92,3 +93,12 @@ def test_the_readme_quick_start_runs_as_written(capsys, monkeypatch):
     out = capsys.readouterr().out
     difference = float(out.split("closed form:")[1].split()[0])
     assert difference < 1e-12
+
+
+def test_impact_of_a_value_json_cannot_carry_or_nested_too_deep_is_an_input_error():
+    # Through the command line's JSON reader: NaN is not JSON, and its depth limit holds here too.
+    with pytest.raises(palpable.InputError, match=r"^spec: not valid JSON"):
+        palpable.impact({"K": float("nan")})
+    deep = json.loads("[" * 600 + "]" * 600)
+    with pytest.raises(palpable.InputError, match=r"^spec: nested deeper than 256 levels"):
+        palpable.impact({"K": deep})
