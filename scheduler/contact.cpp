@@ -443,6 +443,40 @@ bool carries_riders(const Contact& c, const Settings& settings, const Vec3& grav
   return buffer;
 }
 
+namespace {
+
+// A face resting on a face does not rock: the pressure over the patch takes out the small
+// in-plane relative rotation (a plastic slap; the spin about n stays free). Over a segment, only
+// the rotation about m = n x s. The pressure acts as a couple L on the dynamic body, dw = I^-1 L
+// with L in the rocking axes, sized so that the rocking stops: the plastic projection in the
+// kinetic-energy metric, which never adds energy. (Zeroing the rocking components of w directly
+// is the same when those axes are principal, as for a box or a coin lying flat, but adds energy
+// to a body whose principal axes are tilted to them: a coin rolling on its rim's edge.)
+void stop_rocking(const Contact& c, ContactBody& cb1, ContactBody& cb2) {
+  ContactBody& cd = c.dynamic1() ? cb1 : cb2;
+  const Vec3 w_rel = c.dynamic1() ? cb1.w_W - cb2.w_W : cb2.w_W - cb1.w_W;
+  // The body's own inertia (the impulse pass saw the rule's constrained one).
+  const Mat3& inv_i = (c.dynamic1() ? c.body1 : c.body2).inv_inertia_W;
+  if (c.placement == Placement::kSegment) {
+    const Vec3 m = c.n_W.cross(c.segment_dir_W);
+    const double k = m.dot(inv_i * m);
+    if (k > 0.0) cd.w_W -= inv_i * m * (m.dot(w_rel) / k);
+    return;
+  }
+  const Mat3 frame = contact_frame_W(c.n_W);
+  const Vec3 t1 = frame.col(0), t2 = frame.col(1);
+  const Vec3 i_t1 = inv_i * t1, i_t2 = inv_i * t2;
+  Eigen::Matrix2d a;
+  a << t1.dot(i_t1), t1.dot(i_t2), t2.dot(i_t1), t2.dot(i_t2);
+  const Eigen::Vector2d rocking(t1.dot(w_rel), t2.dot(w_rel));
+  const double det = a.determinant();
+  if (!(det > 0.0)) return;
+  const Eigen::Vector2d couple = -(a.inverse() * rocking);
+  cd.w_W += i_t1 * couple.x() + i_t2 * couple.y();
+}
+
+}  // namespace
+
 Resolution resolve(Contact c, const ContactSide& side1, const ContactSide& side2,
                    const Material& material, const Settings& settings,
                    const std::vector<Rider>& riders, double t, const ResolveOptions& options) {
@@ -491,19 +525,7 @@ Resolution resolve(Contact c, const ContactSide& side1, const ContactSide& side2
   ContactBody& cb1 = pass.cb1;
   ContactBody& cb2 = pass.cb2;
   apply_impulse(pass.p_W, cb1, cb2);
-  if (c.centre_of_pressure()) {
-    // A face resting on a face does not rock: the pressure over the patch takes out the small
-    // in-plane relative rotation (a plastic slap; the spin about n stays free). Over a segment,
-    // only the rotation about m = n x s.
-    ContactBody& cd = c.dynamic1() ? cb1 : cb2;
-    const Vec3 w_rel = c.dynamic1() ? cb1.w_W - cb2.w_W : cb2.w_W - cb1.w_W;
-    if (c.placement == Placement::kSegment) {
-      const Vec3 m = c.n_W.cross(c.segment_dir_W);
-      cd.w_W -= m * m.dot(w_rel);
-    } else {
-      cd.w_W -= w_rel - c.n_W * c.n_W.dot(w_rel);
-    }
-  }
+  if (c.centre_of_pressure()) stop_rocking(c, cb1, cb2);
   resist_rotation(c, material, pass.p_W.dot(c.n_W), at.pressure_W, cb1, cb2);
   out.v1_W = side1.body.is_dynamic() ? cb1.v_W : side1.state.v_W;
   out.w1_W = side1.body.is_dynamic() ? cb1.w_W : side1.state.w_W;

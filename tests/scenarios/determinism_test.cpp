@@ -59,9 +59,9 @@ const Expected kExpected[] = {
     {"balls_in_dish.json", 0xc5cfd1401f806573ull},
     {"block_on_ramp_accelerating.json", 0x6b95d2cc13eadd0aull},
     {"block_on_ramp_decelerating.json", 0xa6bcfd47994a1366ull},
-    {"bowling.json", 0xfd33168a4529423dull},
+    {"bowling.json", 0x44dd0a42a9294e2cull},
     {"chain_of_balls.json", 0x69cecbdff0e5ac8dull},
-    {"coins.json", 0x0ee7dc1f0e70bc38ull},
+    {"coins.json", 0xd69371922a102d5cull},
     {"pool_break.json", 0x28364c4193e1c873ull},
     {"sphere_slide_to_roll.json", 0x8d0cc90c21d15ce4ull},
 };

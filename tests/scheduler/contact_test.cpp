@@ -142,6 +142,37 @@ TEST_CASE("contact: a disk rolling on one facet of its rim is rolling, not resti
   }
 }
 
+TEST_CASE("contact: stopping the rocking over a tilted disk's rim edge creates no energy",
+          "[contact]") {
+  // The 64-gon disk tilted 30 degrees from upright, on the lower edge of one rim facet (a
+  // segment along x), landing at 0.3 m/s (no microcollision: no rebound at v_micro adds energy)
+  // and rocking slowly across it (w_y) while spinning about the vertical. The rule stops the rocking; the disk's principal axes are tilted
+  // to the segment's frame, so zeroing w_y alone changes its energy by -I_yz w_y w_z, a gain for
+  // one sign of w_y (coins: 3.4e-7 J in one collision). A couple about m = n x s sized to stop
+  // the rocking (the plastic projection in the energy metric) never adds energy.
+  const int n = 64;
+  const double R = 0.02, hh = 0.001, h = R * std::cos(kPi / n), beta = kPi / 2 - kPi / 6;
+  const Quat q = test::about(Vec3::UnitX(), beta) *
+                 test::about(Vec3::UnitZ(), -kPi / 2 - 47.5 * 2 * kPi / n);
+  const double z = h * std::sin(beta) + hh * std::cos(beta) + 2e-5;
+  for (double rocking : {-2.0, 2.0}) {
+    CAPTURE(rocking);
+    const Posed posed(test::dynamic_body("disk", ConvexPolyhedron::prism(R, hh, n), 0.01,
+                                         Vec3(0, 0, z), q, Vec3(0, 0, -0.06),
+                                         Vec3(0, rocking, 50)),
+                      test::fixed_ground());
+    const Contact c = posed.contact();
+    REQUIRE(c.placement == Placement::kSegment);
+    CHECK(std::abs(c.segment_dir_W.x()) == Approx(1.0));
+    const Resolution r = posed.resolve_it(Material{0.0, 0.0});
+    CHECK(r.record.centre_of_pressure);
+    const Vec3 m = c.n_W.cross(c.segment_dir_W);
+    CHECK(m.dot(r.w1_W) == Approx(0.0).margin(1e-14));  // the rocking stopped
+    CHECK(r.w1_W.z() != 50.0);  // the couple turns the spin too
+    CHECK(r.record.energy_change <= 1e-18);
+  }
+}
+
 TEST_CASE("contact: a tall block sliding fast tips about its front edge", "[contact]") {
   // A 0.1 x 0.1 x 1 m column landing flat at 2 m/s forward: its centre of mass is 0.5 m up, so
   // the line of action of an impulse with mu = 0.5 meets the ground 0.25 m ahead of the foot,
