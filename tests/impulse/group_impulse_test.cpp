@@ -1,0 +1,275 @@
+// Simultaneous impact (impulse/group_impulse.hpp) against closed forms, a brute-force oracle and
+// the properties the model claims: momentum, no energy created, impulses inside their cones, no
+// contact left approaching, mirror symmetry.
+#include "impulse/group_impulse.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <Eigen/Dense>
+
+#include <cmath>
+#include <random>
+
+using namespace palpable;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+GroupBody ball(double m, double r, const Vec3& x, const Vec3& v, const Vec3& w = Vec3::Zero()) {
+  GroupBody b;
+  b.inv_mass = 1.0 / m;
+  b.inv_inertia_W = Mat3::Identity() / (0.4 * m * r * r);
+  b.x_W = x;
+  b.v_W = v;
+  b.w_W = w;
+  return b;
+}
+
+GroupBody fixed() { return GroupBody{}; }
+
+GroupBody cube(double m, double half, const Vec3& x, const Vec3& v) {
+  GroupBody b;
+  b.inv_mass = 1.0 / m;
+  b.inv_inertia_W = Mat3::Identity() / (m * (2 * half) * (2 * half) / 6.0);
+  b.x_W = x;
+  b.v_W = v;
+  return b;
+}
+
+Vec3 momentum(const std::vector<GroupBody>& bodies, const std::vector<Vec3>& v) {
+  Vec3 p = Vec3::Zero();
+  for (std::size_t j = 0; j < bodies.size(); ++j) {
+    if (bodies[j].inv_mass > 0.0) p += v[j] / bodies[j].inv_mass;
+  }
+  return p;
+}
+
+Vec3 normal_velocity_after(const GroupContact& c, const std::vector<GroupBody>& bodies,
+                           const GroupResult& r, double& u_n) {
+  auto at = [&](int j) -> Vec3 {
+    return r.v_W[j] + r.w_W[j].cross(c.point_W - bodies[j].x_W);
+  };
+  const Vec3 u = at(c.body1) - at(c.body2);
+  u_n = u.dot(c.n_W);
+  return u;
+}
+
+}  // namespace
+
+TEST_CASE("group: one frictionless contact is Poisson's single impact", "[group]") {
+  for (double e : {0.0, 0.5, 1.0}) {
+    CAPTURE(e);
+    const std::vector<GroupBody> bodies{ball(2.0, 0.1, Vec3(0, 0, 0.1), Vec3(0.3, 0, -2)), fixed()};
+    const std::vector<GroupContact> contacts{{0, 1, Vec3::Zero(), Vec3::UnitZ(), 0.0, e}};
+    const GroupResult r = resolve_group(bodies, contacts);
+    CHECK(r.converged);
+    CHECK(r.v_W[0].z() == Approx(2.0 * e).margin(1e-12));
+    CHECK(r.v_W[0].x() == Approx(0.3).epsilon(1e-14));
+    CHECK(r.impulse_W[0].z() == Approx(2.0 * 2.0 * (1 + e)).epsilon(1e-12));
+  }
+}
+
+TEST_CASE("group: a ball dropped into a V-groove stays on its axis", "[group]") {
+  // Walls at +-half_angle from the vertical axis of the groove: normals (-+cos, 0, sin) of the
+  // half angle's complement. Frictionless, the normal impulses are equal: P = m v / (2 cos a),
+  // a the angle of each normal from the vertical; then Poisson's e P each.
+  for (double groove : {kPi / 2, kPi / 3}) {
+    for (double mu : {0.0, 0.5}) {
+      for (double e : {0.0, 0.5}) {
+        CAPTURE(groove, mu, e);
+        const double a = 0.5 * (kPi - groove);  // each normal's angle from the vertical
+        const double r = 0.05;
+        const Vec3 n1(std::sin(a), 0, std::cos(a)), n2(-std::sin(a), 0, std::cos(a));
+        const std::vector<GroupBody> bodies{ball(1.0, r, Vec3(0, 0, 0), Vec3(0, 0, -1.5)),
+                                            fixed()};
+        const std::vector<GroupContact> contacts{{0, 1, Vec3(0, 0, 0) - r * n1, n1, mu, e},
+                                                 {0, 1, Vec3(0, 0, 0) - r * n2, n2, mu, e}};
+        const GroupResult res = resolve_group(bodies, contacts);
+        CHECK(res.converged);
+        CHECK(std::abs(res.v_W[0].x()) <= 1e-15);
+        CHECK(res.w_W[0].norm() <= 1e-13);
+        CHECK(res.energy_after <= res.energy_before);
+        if (mu == 0.0) CHECK(res.v_W[0].z() == Approx(1.5 * e).margin(1e-12));
+        // Mirror symmetry of the two impulses.
+        CHECK(res.impulse_W[0].x() == Approx(-res.impulse_W[1].x()).margin(1e-13));
+        CHECK(res.impulse_W[0].z() == Approx(res.impulse_W[1].z()).margin(1e-13));
+      }
+    }
+  }
+}
+
+TEST_CASE("group: a cube landing flat on a free cube, four corners at once", "[group]") {
+  // Two 1 kg, 0.2 m cubes; the top one falls at 2 m/s onto the bottom one (free, no support).
+  // Frictionless: the four equal corner impulses act as one through the centres of mass: the
+  // plastic phase leaves both at -1 m/s, Poisson's e then gives top -(1 - e), bottom -(1 + e).
+  // No rotation, by symmetry, and momentum -2 kg m/s exactly.
+  for (double e : {0.0, 0.5, 1.0}) {
+    for (double mu : {0.0, 0.5}) {
+      CAPTURE(e, mu);
+      const double h = 0.1;
+      const std::vector<GroupBody> bodies{cube(1.0, h, Vec3(0, 0, 2 * h), Vec3(0, 0, -2)),
+                                          cube(1.0, h, Vec3(0, 0, 0), Vec3::Zero())};
+      std::vector<GroupContact> contacts;
+      for (double sx : {-1.0, 1.0}) {
+        for (double sy : {-1.0, 1.0}) contacts.push_back({0, 1, Vec3(sx * h, sy * h, h), Vec3::UnitZ(), mu, e});
+      }
+      const GroupResult r = resolve_group(bodies, contacts);
+      CHECK(r.converged);
+      CHECK(r.v_W[0].z() == Approx(-(1 - e)).margin(1e-11));
+      CHECK(r.v_W[1].z() == Approx(-(1 + e)).margin(1e-11));
+      CHECK(r.w_W[0].norm() <= 1e-9);
+      CHECK(r.w_W[1].norm() <= 1e-9);
+      CHECK((momentum(bodies, r.v_W) - Vec3(0, 0, -2)).norm() <= 1e-13);
+      // e = 1: the energy is kept.
+      if (e == 1.0) CHECK(r.energy_after == Approx(r.energy_before).epsilon(1e-12));
+    }
+  }
+}
+
+TEST_CASE("group: frictionless plastic groups match a brute-force LCP oracle", "[group]") {
+  // e = 0, mu = 0: the impulse solves the LCP u = A l + b >= 0, l >= 0, l.u = 0. For small
+  // groups every active set can be tried: the one whose solution is feasible gives the unique
+  // velocities (A may be singular, the velocities are not).
+  std::mt19937_64 rng(1515);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  int checked = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    const int nb = 2 + static_cast<int>(rng() % 2);
+    const int k = 2 + static_cast<int>(rng() % 4);
+    std::vector<GroupBody> bodies;
+    for (int j = 0; j < nb; ++j) {
+      GroupBody b = ball(0.5 + 0.5 * (U(rng) + 1), 0.1, Vec3(U(rng), U(rng), U(rng)),
+                         Vec3(U(rng), U(rng), U(rng)), Vec3(U(rng), U(rng), U(rng)));
+      bodies.push_back(b);
+    }
+    bodies.push_back(fixed());
+    std::vector<GroupContact> contacts;
+    for (int i = 0; i < k; ++i) {
+      const int b1 = static_cast<int>(rng() % nb);
+      int b2 = static_cast<int>(rng() % (nb + 1));
+      if (b2 == b1) b2 = nb;
+      contacts.push_back({b1, b2, Vec3(U(rng), U(rng), U(rng)),
+                          Vec3(U(rng), U(rng), U(rng)).normalized(), 0.0, 0.0});
+    }
+    const GroupResult r = resolve_group(bodies, contacts);
+    REQUIRE(r.converged);
+    // Oracle: normal-only LCP by enumeration.
+    Eigen::MatrixXd N(k, 6 * (nb + 1));
+    N.setZero();
+    Eigen::MatrixXd Minv = Eigen::MatrixXd::Zero(6 * (nb + 1), 6 * (nb + 1));
+    Eigen::VectorXd q(6 * (nb + 1));
+    for (int j = 0; j <= nb; ++j) {
+      q.segment<3>(6 * j) = bodies[j].v_W;
+      q.segment<3>(6 * j + 3) = bodies[j].w_W;
+      Minv.block<3, 3>(6 * j, 6 * j) = Mat3::Identity() * bodies[j].inv_mass;
+      Minv.block<3, 3>(6 * j + 3, 6 * j + 3) = bodies[j].inv_inertia_W;
+    }
+    for (int i = 0; i < k; ++i) {
+      const GroupContact& c = contacts[i];
+      for (auto [j, s] : {std::pair{c.body1, 1.0}, std::pair{c.body2, -1.0}}) {
+        N.block<1, 3>(i, 6 * j) += s * c.n_W.transpose();
+        N.block<1, 3>(i, 6 * j + 3) += s * (c.point_W - bodies[j].x_W).cross(c.n_W).transpose();
+      }
+    }
+    const Eigen::MatrixXd A = N * Minv * N.transpose();
+    const Eigen::VectorXd b = N * q;
+    bool found = false;
+    for (int mask = 0; mask < (1 << k) && !found; ++mask) {
+      std::vector<int> act;
+      for (int i = 0; i < k; ++i) {
+        if (mask & (1 << i)) act.push_back(i);
+      }
+      Eigen::VectorXd l = Eigen::VectorXd::Zero(k);
+      if (!act.empty()) {
+        Eigen::MatrixXd Aa(act.size(), act.size());
+        Eigen::VectorXd ba(act.size());
+        for (std::size_t x = 0; x < act.size(); ++x) {
+          ba[x] = b[act[x]];
+          for (std::size_t y = 0; y < act.size(); ++y) Aa(x, y) = A(act[x], act[y]);
+        }
+        const Eigen::VectorXd la = Aa.completeOrthogonalDecomposition().solve(-ba);
+        if ((Aa * la + ba).norm() > 1e-9 * (1 + ba.norm())) continue;
+        for (std::size_t x = 0; x < act.size(); ++x) l[act[x]] = la[x];
+      }
+      const Eigen::VectorXd u = A * l + b;
+      if (l.minCoeff() < -1e-12 || u.minCoeff() < -1e-9 * (1 + b.norm())) continue;
+      found = true;
+      const Eigen::VectorXd q_after = q + Minv * N.transpose() * l;
+      for (int j = 0; j < nb; ++j) {
+        CHECK((r.v_W[j] - Vec3(q_after.segment<3>(6 * j))).norm() <= 1e-9);
+        CHECK((r.w_W[j] - Vec3(q_after.segment<3>(6 * j + 3))).norm() <= 1e-9);
+      }
+    }
+    if (found) ++checked;
+  }
+  CHECK(checked >= 290);  // degenerate active sets aside, the oracle decides nearly every group
+}
+
+TEST_CASE("group: random groups create no energy, keep their cones and momentum, end separating",
+          "[group]") {
+  // The property test of issue 15 at 2,000 groups (tools: `palpable bench groups` runs 100,000):
+  // 2-8 contacts among 1-4 dynamic bodies and a fixed one, random masses, inertias, mu, e.
+  std::mt19937_64 rng(20261124);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  int unconverged = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    CAPTURE(trial);
+    const int nb = 1 + static_cast<int>(rng() % 4);
+    const int k = 2 + static_cast<int>(rng() % 7);
+    const bool with_fixed = rng() % 2 == 0 || nb == 1;
+    std::vector<GroupBody> bodies;
+    for (int j = 0; j < nb; ++j) {
+      GroupBody b;
+      b.inv_mass = 1.0 / std::pow(10.0, 2 * U(rng));
+      const Eigen::Matrix3d Q = Eigen::Quaterniond::UnitRandom().toRotationMatrix();
+      const Vec3 d(std::pow(10.0, U(rng)), std::pow(10.0, U(rng)), std::pow(10.0, U(rng)));
+      b.inv_inertia_W = Q * d.asDiagonal() * Q.transpose() * b.inv_mass * 10.0;
+      b.x_W = Vec3(U(rng), U(rng), U(rng));
+      b.v_W = Vec3(U(rng), U(rng), U(rng)) * 3.0;
+      b.w_W = Vec3(U(rng), U(rng), U(rng)) * 5.0;
+      bodies.push_back(b);
+    }
+    if (with_fixed) bodies.push_back(fixed());
+    const int all = static_cast<int>(bodies.size());
+    std::vector<GroupContact> contacts;
+    for (int i = 0; i < k; ++i) {
+      const int b1 = static_cast<int>(rng() % nb);
+      int b2 = static_cast<int>(rng() % all);
+      if (b2 == b1) b2 = (b1 + 1) % all;
+      if (b2 == b1) continue;
+      contacts.push_back({b1, b2, Vec3(U(rng), U(rng), U(rng)),
+                          Vec3(U(rng), U(rng), U(rng)).normalized(), 0.5 * (U(rng) + 1) * 1.2,
+                          0.5 * (U(rng) + 1)});
+    }
+    if (contacts.size() < 2) continue;
+    const GroupResult r = resolve_group(bodies, contacts);
+    // Convergence is not asked here: this distribution is far worse conditioned than groups in
+    // scenes (masses over 4 decades, inertias over 2, random normals on random points); 24 % of
+    // its groups stop at the cone solver's iteration cap. The properties hold for every group.
+    unconverged += r.converged ? 0 : 1;
+    CHECK(r.energy_after <= r.energy_before * (1 + 1e-12) + 1e-15);
+    double speed = 0.0;
+    for (std::size_t j = 0; j < bodies.size(); ++j) speed = std::max(speed, bodies[j].v_W.norm() + bodies[j].w_W.norm());
+    double p_scale = 0.0;
+    for (const Vec3& p : r.impulse_W) p_scale = std::max(p_scale, p.norm());
+    for (std::size_t i = 0; i < contacts.size(); ++i) {
+      const GroupContact& c = contacts[i];
+      const double pn = r.impulse_W[i].dot(c.n_W);
+      const double pt = (r.impulse_W[i] - c.n_W * pn).norm();
+      CHECK(pn >= -1e-12 * p_scale);
+      CHECK(pt <= c.friction * pn + 1e-9 * p_scale);
+      double u_n = 0.0;
+      normal_velocity_after(c, bodies, r, u_n);
+      CHECK(u_n >= -1e-8 * (1 + speed));
+      CHECK(u_n == Approx(r.normal_velocity[i]).margin(1e-9));
+    }
+    if (!with_fixed) {
+      std::vector<Vec3> v0;
+      for (const GroupBody& b : bodies) v0.push_back(b.v_W);
+      CHECK((momentum(bodies, r.v_W) - momentum(bodies, v0)).norm() <=
+            1e-12 * (1 + momentum(bodies, v0).norm() + p_scale));
+    }
+  }
+  WARN("groups that stopped at the iteration cap: " << unconverged << " of 2000");
+}
