@@ -45,6 +45,9 @@ struct SimulationStats {
   std::uint64_t impulse_failures = 0;    // collisions whose integration failed
   std::uint64_t centre_of_pressure = 0;  // collisions resolved by the centre-of-pressure rule
   std::uint64_t riders_carried = 0;      // bodies carried along by a microcollision below them
+  std::uint64_t groups = 0;              // simultaneous impacts resolved as one group
+  std::uint64_t group_contacts = 0;      // their contacts (counted in collisions too)
+  std::uint64_t group_unconverged = 0;   // groups whose cone solver stopped at its iteration cap
   std::uint64_t feature_steps = 0;       // V-Clip feature steps, all queries
   std::uint64_t integration_steps = 0;   // Runge-Kutta steps, all collisions
   std::uint64_t pairs_created = 0;       // pairs entering the broad phase

@@ -146,6 +146,14 @@ struct Simulation::Impl {
   // its gap closes —, else re-bound. Returns the collision, if any.
   std::optional<CollisionRecord> check_pair(std::uint32_t index, double t);
 
+  // Simultaneous impact (issue 15, impulse/group_impulse.hpp): the contacts that meet pair
+  // `index`'s collision at instant t with an impact's approach (faster than the microcollision
+  // speed) - the corners of a face landing on a dynamic face, and the contacts of every pair of
+  // the collision's dynamic bodies within the envelope - resolved as one group when there are
+  // two or more. Returns nothing (and changes nothing) for a single contact, or when a body is
+  // held: the pair's own collision path then resolves it.
+  std::optional<CollisionRecord> collide_group(std::uint32_t index, const Contact& c, double t);
+
   // ---------------------------------------------------------------- persistent contact
 
   void report(const char* kind, BodyId a, BodyId b, const Vec3& p_W, double t);

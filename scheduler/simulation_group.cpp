@@ -1,0 +1,163 @@
+// Simultaneous impact (Simulation::Impl, scheduler/simulation_impl.hpp): the contacts that meet
+// a collision at its instant gathered into one group and resolved together
+// (impulse/group_impulse.hpp).
+#include "scheduler/simulation_impl.hpp"
+
+#include "core/ballistic.hpp"
+#include "impulse/collision_matrix.hpp"
+#include "impulse/group_impulse.hpp"
+#include "distance/toi_bound.hpp"
+#include "impulse/microcollision.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace palpable {
+
+std::optional<CollisionRecord> Simulation::Impl::collide_group(std::uint32_t index,
+                                                                const Contact& first, double t) {
+  const PairSet::Pair& p0 = pairs.pair(index);
+  if (island(p0.a) || island(p0.b)) return std::nullopt;
+
+  struct Member {
+    std::uint32_t pair;
+    BodyId a, b;
+    Vec3 point_W, n_W;
+    double approach;
+  };
+  std::vector<Member> members;
+  // An impact: an approach faster than the microcollision speed under the scene's full gravity,
+  // whatever the normal (two balls touching side by side in a row approach at rounding speeds).
+  const double impact_speed = microcollision_speed(settings(), world.gravity_W.norm()) *
+                              (1.0 + settings().microcollision_speed_slack);
+  // Nothing is committed or cached until a group forms: a lone contact leaves the run exactly as
+  // it was (states extrapolated here, closest features from a copy of each pair's cache).
+  auto state_at = [&](BodyId id) { return body(id).state.t < t ? extrapolate(id, t) : body(id).state; };
+  // A contact that approaches at an impact's speed, at its point.
+  auto add_contact = [&](std::uint32_t pair, const Contact& c, const BodyState& s1,
+                         const BodyState& s2) {
+    // (A face landing on a dynamic face - its patch's corners as one group - is not grouped
+    // yet: resolved symmetrically, two boxes turning alike sent the closest-feature walk of
+    // their exactly parallel faces into a cycle; issue 15's note.)
+    for (const Vec3& q : {c.point_W}) {
+      const double u_n = (point_velocity_W(s1, q) - point_velocity_W(s2, q)).dot(c.n_W);
+      if (!(u_n < -impact_speed)) continue;
+      members.push_back(Member{pair, c.a, c.b, q, c.n_W, -u_n});
+    }
+  };
+  add_contact(index, first, body(p0.a).state, body(p0.b).state);
+  // Every other pair of the collision's dynamic bodies within the envelope at t.
+  std::vector<std::uint32_t> others;
+  for (BodyId id : {p0.a, p0.b}) {
+    if (!body(id).is_dynamic()) continue;
+    for (std::uint32_t q : pairs.body(id).pairs) {
+      if (q != index && std::find(others.begin(), others.end(), q) == others.end()) {
+        others.push_back(q);
+      }
+    }
+  }
+  std::sort(others.begin(), others.end());
+  for (std::uint32_t q_index : others) {
+    const PairSet::Pair& q = pairs.pair(q_index);
+    if (island(q.a) || island(q.b)) return std::nullopt;
+    const BodyState s1 = state_at(q.a), s2 = state_at(q.b);
+    PairCache cache;  // fresh: the pair's own cache stays as its schedule left it
+    ++stats.bound_queries;
+    const DistanceResult dr =
+        closest_features(pairs.geometry(q.a), Pose{s1.x_W, s1.q_WM}, pairs.geometry(q.b),
+                         Pose{s2.x_W, s2.q_WM}, cache, settings().distance_max_steps);
+    const DistanceResult& contact = contact_result(q, s1, s2, dr);
+    if (contact.status == ContactStatus::kFailed || contact.status == ContactStatus::kPenetrating ||
+        contact.distance > settings().envelope_m) {
+      continue;
+    }
+    // Sequential where the physics is: a contact whose exact instant of touching is still
+    // ahead (spheres and planes) collides then, on its own.
+    double reach = 0.0;
+    for (BodyId id : {q.a, q.b}) {
+      if (std::isfinite(pairs.geometry(id).reach())) reach += pairs.geometry(id).reach();
+    }
+    if (contact.distance > kTouchingGap * reach) {
+      const ToiBound ahead = time_to_touch(body(q.a), s1, pairs.geometry(q.a), body(q.b), s2,
+                                           pairs.geometry(q.b), contact, cache, world.gravity_W,
+                                           settings());
+      if (ahead.exact && ahead.dt > 0.0) continue;
+    }
+    const Contact c = make_contact(side(q.a, s1), side(q.b, s2), contact, settings(),
+                                   world.gravity_W, /*with_patch=*/true);
+    add_contact(q_index, c, s1, s2);
+  }
+  if (members.size() < 2) return std::nullopt;
+
+  // The group's bodies, once each.
+  std::vector<BodyId> ids;
+  auto index_of = [&](BodyId id) {
+    auto it = std::find(ids.begin(), ids.end(), id);
+    if (it != ids.end()) return static_cast<int>(it - ids.begin());
+    ids.push_back(id);
+    return static_cast<int>(ids.size() - 1);
+  };
+  std::vector<GroupContact> contacts;
+  for (const Member& m : members) {
+    const Material& material = world.material(m.a, m.b);
+    contacts.push_back(GroupContact{index_of(m.a), index_of(m.b), m.point_W, m.n_W,
+                                    material.friction, material.restitution});
+  }
+  std::vector<GroupBody> bodies;
+  for (BodyId id : ids) {
+    const Body& b = body(id);
+    const BodyState s = state_at(id);
+    GroupBody g;
+    g.inv_mass = b.is_dynamic() ? b.mass.inv_mass : 0.0;
+    g.inv_inertia_W = b.is_dynamic() ? inverse_inertia_W(b, s.q_WM) : Mat3::Zero();
+    g.x_W = s.x_W;
+    g.v_W = s.v_W;
+    g.w_W = s.w_W;
+    bodies.push_back(g);
+  }
+  const GroupResult r = resolve_group(bodies, contacts);
+  std::vector<double> kinetic_before;
+  for (BodyId id : ids) {
+    commit(id, t);
+    kinetic_before.push_back(body(id).is_dynamic() ? kinetic_energy(body(id), body(id).state) : 0.0);
+  }
+  for (std::size_t j = 0; j < ids.size(); ++j) {
+    Body& b = body(ids[j]);
+    if (!b.is_dynamic()) continue;
+    b.state.v_W = r.v_W[j];
+    b.state.w_W = r.w_W[j];
+  }
+  ++stats.groups;
+  stats.group_contacts += members.size();
+  if (!r.converged) ++stats.group_unconverged;
+
+  std::vector<CollisionRecord> records;
+  std::vector<bool> counted(ids.size(), false);
+  for (std::size_t i = 0; i < members.size(); ++i) {
+    CollisionRecord record;
+    record.t = t;
+    record.kind = CollisionKind::kCollision;
+    record.a = members[i].a;
+    record.b = members[i].b;
+    record.p_W = members[i].point_W;
+    record.n_W = members[i].n_W;
+    record.impulse_W = r.impulse_W[i];
+    record.approach_speed = members[i].approach;
+    // The group's energy change, each body's once: on the first record that names it.
+    for (BodyId id : {members[i].a, members[i].b}) {
+      const std::size_t j = static_cast<std::size_t>(index_of(id));
+      if (counted[j] || !body(id).is_dynamic()) continue;
+      counted[j] = true;
+      record.energy_change += kinetic_energy(body(id), body(id).state) - kinetic_before[j];
+    }
+    pairs.pair(members[i].pair).last_collision_t = t;
+    ++stats.collisions;
+    if (observer) observer->on_collision(record);
+    records.push_back(record);
+  }
+  // Bodies and pairs refreshed once the whole group is committed (`p0` may move here).
+  for (const CollisionRecord& record : records) refresh_after_collision(record, t);
+  return records.front();
+}
+
+}  // namespace palpable
