@@ -228,8 +228,38 @@ GroupResult resolve_group(const std::vector<GroupBody>& bodies,
   };
 
   // 1. Compression.
+  const VecX u0 = J * q;
   VecX l_c = VecX::Zero(3 * k);
-  out.iterations += apgd(A, J * q, l_c, cones, options, out.converged);
+  out.iterations += apgd(A, u0, l_c, cones, options, out.converged);
+  // The cone problem's conditions leave a sliding contact separating at mu |u_t| (Anitescu's
+  // relaxation): a ball sliding on the cloth would leave it. Coulomb's law wants u_n = 0 there.
+  // Fixed point on the shift s_i = mu_i |u_t,i|: the cone problem with b_n + s_i leaves
+  // u_n + s_i >= mu_i |u_t,i| = s_i, so u_n >= 0, complementary to lambda_n (De Saxce's
+  // bipotential). Each round starts from the last impulse; a round that would gain energy is not
+  // taken (the relaxed answer never gains).
+  {
+    double speed = 0.0;
+    for (int i = 0; i < k; ++i) speed = std::max(speed, u0.segment<3>(3 * i).norm());
+    VecX shift = VecX::Zero(3 * k);
+    const double ke0 = out.energy_before;
+    for (int round = 0; round < options.max_shift_rounds; ++round) {
+      const VecX u = A * l_c + u0;
+      VecX next = VecX::Zero(3 * k);
+      for (int i = 0; i < k; ++i) {
+        next[3 * i + 2] = contacts[i].friction * u.segment<2>(3 * i).norm();
+      }
+      if ((next - shift).lpNorm<Eigen::Infinity>() <= options.tolerance * 1e2 * speed) break;
+      shift = next;
+      VecX l_try = l_c;
+      bool ok = true;
+      const int used = apgd(A, u0 + shift, l_try, cones, options, ok);
+      out.iterations += used;
+      if (kinetic(bodies, q + MinvJt * l_try) > ke0) break;
+      out.shift_rounds = round + 1;
+      l_c = l_try;
+      out.converged = out.converged && ok;
+    }
+  }
   VecX q_c = q + MinvJt * l_c;
 
   // 2. Expansion (Poisson): the normal impulses e lambda_c,n; friction within their disks.

@@ -8,7 +8,9 @@
 //     change f(lambda) = lambda.u0 + lambda.A.lambda / 2 over the Coulomb cones (|lambda_t| <=
 //     mu lambda_n) - the cone-complementarity problem of Anitescu & Tasora (2010). Its KKT
 //     conditions leave every contact separating or at rest (u_n >= mu |u_t| >= 0), friction
-//     maximally dissipative, and f <= f(0) = 0: compression never adds energy.
+//     maximally dissipative, and f <= f(0) = 0: compression never adds energy. A sliding contact
+//     would separate at mu |u_t|; a fixed point on that shift (solving again with b_n + mu |u_t|)
+//     gives Coulomb's u_n = 0 there, each round kept only if it adds no energy.
 //  2. Expansion, Poisson's hypothesis per contact: the normal impulse e_i lambda_c,n,i at every
 //     contact, with the friction that minimises f over the disks |lambda_t| <= mu e lambda_c,n.
 //     If the expansion would end with more kinetic energy than the group had before impact, it
@@ -56,6 +58,7 @@ struct GroupContact {
 struct GroupOptions {
   double tolerance = 1e-14;  // stationarity of the cone problems, relative to the impulse scale
   int max_iterations = 20000;
+  int max_shift_rounds = 50;  // fixed-point rounds on the sliding contacts' normal shift
 };
 
 struct GroupResult {
@@ -68,6 +71,7 @@ struct GroupResult {
   int iterations = 0;              // APGD iterations over all phases
   bool converged = true;
   bool final_push = false;  // phase 3 acted: something still approached after the expansion
+  int shift_rounds = 0;     // fixed-point rounds taken on the sliding contacts' normal shift
 };
 
 // Resolves the group; throws std::invalid_argument on a body index out of range or a non-unit

@@ -138,7 +138,12 @@ std::optional<CollisionRecord> Simulation::Impl::check_pair(std::uint32_t index,
   }
   if (!lands || lifting(p, c, t)) {
     p.approach_steps = 0;
-    schedule_pair(index, next_check_time(p, s1, s2, dr, t, &c));
+    double next = next_check_time(p, s1, s2, dr, t, &c);
+    // An exact bound of zero means "collide now"; a contact found not approaching (a group impact
+    // leaves a sliding contact at u_n = 0 to rounding, drawn together by gravity) is checked
+    // again a clock tick later, when its approach has begun - not at this instant forever.
+    if (!lands && next == t) next = t + 1e-12 * std::max(1.0, t);
+    schedule_pair(index, next);
     return std::nullopt;
   }
   if (const double dt = time_to_contact(p, c, contact, t); dt > 0.0) {

@@ -70,6 +70,24 @@ TEST_CASE("group: one frictionless contact is Poisson's single impact", "[group]
   }
 }
 
+// A contact that slides throughout: Coulomb's law ends the compression at u_n = 0 (the cone
+// problem alone would leave it separating at mu |u_t|, 1 m/s here: a sliding ball would hop).
+TEST_CASE("group: a ball sliding fast onto a floor does not hop", "[group]") {
+  const double m = 0.17, radius = 0.028575, mu = 0.2, vx = 5.0, vz = -0.1;
+  for (double e : {0.0, 0.5}) {
+    CAPTURE(e);
+    const std::vector<GroupBody> bodies{ball(m, radius, Vec3(0, 0, radius), Vec3(vx, 0, vz)),
+                                        fixed()};
+    const std::vector<GroupContact> contacts{{0, 1, Vec3::Zero(), Vec3::UnitZ(), mu, e}};
+    const GroupResult r = resolve_group(bodies, contacts);
+    // Sliding throughout: P_n = m |vz| (1 + e), friction mu P_n against the slip.
+    CHECK(r.v_W[0].z() == Approx(-e * vz).margin(1e-9));
+    CHECK(r.v_W[0].x() == Approx(vx + mu * (1 + e) * vz).epsilon(1e-9));
+    CHECK(r.impulse_W[0].z() == Approx(-m * vz * (1 + e)).epsilon(1e-9));
+    CHECK(r.energy_after <= r.energy_before);
+  }
+}
+
 TEST_CASE("group: a ball dropped into a V-groove stays on its axis", "[group]") {
   // Walls at +-half_angle from the vertical axis of the groove: normals (-+cos, 0, sin) of the
   // half angle's complement. Frictionless, the normal impulses are equal: P = m v / (2 cos a),
