@@ -254,6 +254,7 @@ class Solver {
       y_(1) += zeta.y() * delta;
       y_(2) += u.z() * delta + 0.5 * d.z() * delta * delta;
       p_z_ += delta;
+      record();
       if (slip_zero) {
         advance_stage();
         return SlideEnd::kSlipZero;
@@ -378,6 +379,9 @@ class Solver {
       }
       ++r_.steps;
       const double theta = locate_event(k, h, y_new);
+      if (params_.path) {
+        for (double f : {0.25, 0.5, 0.75}) record(p_z_ + f * theta * h, dense(k, h, f * theta));
+      }
       if (theta < 1.0) {
         y_ = dense(k, h, theta);
         p_z_ += theta * h;
@@ -389,6 +393,7 @@ class Solver {
         k[0] = k[6];
         if (lands_on_poisson_end) force_transition();
       }
+      record();
       h *= grow;
       // The tangential dynamics du_t/dp_z depends on the slip direction only, so near the slip
       // zero the motion is self-similar and the natural step scales with |u_t|: shrink the next
@@ -420,6 +425,14 @@ class Solver {
     const Vec2 t = A * (lambda * u_t + Vec2(K_.block<2, 1>(0, 2)));
     const Vec2 zeta = -params_.friction * t / t.norm();
     return Vec3(zeta.x(), zeta.y(), 1.0);
+  }
+
+  // Appends the current point (or a given one) to the requested path.
+  void record() const { record(p_z_, y_); }
+  void record(double p_z, const State& y) const {
+    if (!params_.path) return;
+    const Vec3 p(y(0), y(1), p_z);
+    params_.path->push_back(ImpulsePathPoint{p, u0_ + K_ * p});
   }
 
   void finish(CollisionStatus status) {
@@ -564,6 +577,7 @@ CollisionResult integrate_collision(const Mat3& K_c, const Vec3& u0_c,
     return result;
   }
   Solver solver(K_c, u0_c, params, result);
+  solver.record();
   solver.advance_stage();
   if (solver.stage() == Stage::kDone) {
     solver.finish(u0_c.z() > 0.0 ? CollisionStatus::kSeparating : CollisionStatus::kOk);

@@ -27,6 +27,7 @@
 #include <array>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace palpable {
 
@@ -90,6 +91,13 @@ struct CollisionResult {
   void add_phase(PhaseKind kind, double p_z_begin, const Vec2& direction = Vec2::Zero());
 };
 
+// One point of the integration's path: the impulse so far and the relative contact velocity
+// there (contact frame), u = u0 + K_c p. Recorded only on request (CollisionParameters).
+struct ImpulsePathPoint {
+  Vec3 p_c = Vec3::Zero();  // [N s]; p_c.z() is the normal impulse p_z, the integration variable
+  Vec3 u_c = Vec3::Zero();  // [m/s]
+};
+
 // Everything the integrator needs besides K_c and u0.
 struct CollisionParameters {
   double friction = 0.5;     // mu >= 0
@@ -100,6 +108,11 @@ struct CollisionParameters {
   // 0 for an ordinary collision). Restitution goes on past the law's end until u_z = floor.
   double min_rebound_speed = 0.0;
   int max_steps = 100000;  // step budget -> kFailedStepLimit
+  // If set, receives u(p_z) along the integration (for hodographs; `palpable impact
+  // --trajectory`): the start, the end of every closed-form segment (u is linear in p_z there),
+  // and every accepted Runge-Kutta step with three points of its dense output inside. Recording
+  // changes nothing in the result.
+  std::vector<ImpulsePathPoint>* path = nullptr;
 };
 
 CollisionParameters collision_parameters(const Material& material, const Settings& settings);

@@ -18,6 +18,10 @@ CollisionResult direct_impulse(const Mat3& K_c, const Vec3& u0_c, const Vec3& p_
   result.energy_change = 0.5 * (u0_c + result.u_final_c).dot(p_c);
   // u is linear in p along a straight impulse path, so W_z is the trapezoid.
   result.work_normal = 0.5 * (u0_c.z() + result.u_final_c.z()) * p_c.z();
+  // For the record: u_z is linear in p_z along the path too, so compression ends where it is 0.
+  const double du_z = result.u_final_c.z() - u0_c.z();
+  result.p_z_compression =
+      du_z > 0.0 ? p_c.z() * std::clamp(-u0_c.z() / du_z, 0.0, 1.0) : p_c.z();
   result.add_phase(kind, 0.0);
   return result;
 }

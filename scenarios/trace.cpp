@@ -36,8 +36,9 @@ void put(std::ostream& out, double x) {
 }  // namespace
 
 void write_trace_rows(std::ostream& out, double t, const std::vector<std::string>& names,
-                      const std::vector<BodyState>& states) {
+                      const std::vector<BodyState>& states, const std::vector<bool>* skip) {
   for (std::size_t i = 0; i < states.size(); ++i) {
+    if (skip && (*skip)[i]) continue;
     const BodyState& s = states[i];
     put(out, t);
     out << ',' << names[i];
@@ -89,7 +90,14 @@ Trace read_trace_csv(const std::string& path) {
       }
       current_t = v[0];
       trace.times.push_back(current_t);
-      trace.samples.emplace_back(trace.body_names.size());
+      // A body a sample leaves out (a fixed body, written in the first sample only) keeps its
+      // state from the sample before.
+      if (trace.samples.empty()) {
+        trace.samples.emplace_back(trace.body_names.size());
+      } else {
+        trace.samples.push_back(trace.samples.back());
+        for (BodyState& s : trace.samples.back()) s.t = current_t;
+      }
     }
     auto it = index.find(name);
     if (it == index.end()) {

@@ -34,9 +34,11 @@ struct Trace {
 
 inline constexpr const char* kTraceHeader = "t,body,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz";
 
-// Writes the rows of one sample (17 significant digits, round-trip exact).
+// Writes the rows of one sample (17 significant digits, round-trip exact), leaving out the bodies
+// marked in `skip` (fixed bodies after the first sample: read_trace_csv repeats them).
 void write_trace_rows(std::ostream& out, double t, const std::vector<std::string>& names,
-                      const std::vector<BodyState>& states);
+                      const std::vector<BodyState>& states,
+                      const std::vector<bool>* skip = nullptr);
 
 // Reads a trace CSV; throws InputError naming the file and line for malformed input.
 Trace read_trace_csv(const std::string& path);

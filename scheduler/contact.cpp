@@ -544,6 +544,19 @@ Resolution resolve(Contact c, const ContactSide& side1, const ContactSide& side2
   record.n_W = c.n_W;
   record.impulse_W = pass.p_W;
   record.approach_speed = -pass.u0_c.z();
+  record.phase_count = static_cast<std::uint8_t>(pass.result.phase_count);
+  for (int i = 0; i < pass.result.phase_count; ++i) {
+    const CollisionPhase& phase = pass.result.phases[static_cast<std::size_t>(i)];
+    record.phases[static_cast<std::size_t>(i)] = phase.kind;
+    if (phase.kind == PhaseKind::kResumedSliding) {
+      record.resumed_direction_W = pass.R_WC * Vec3(phase.direction.x(), phase.direction.y(), 0.0);
+    }
+  }
+  record.slip_before_W = pass.R_WC * Vec3(pass.u0_c.x(), pass.u0_c.y(), 0.0);
+  record.slip_after_W =
+      pass.R_WC * Vec3(pass.result.u_final_c.x(), pass.result.u_final_c.y(), 0.0);
+  record.normal_impulse_compression = pass.result.p_z_compression;
+  record.normal_impulse_restitution = pass.result.p_c.z() - pass.result.p_z_compression;
   BodyState after1 = side1.state, after2 = side2.state;
   after1.v_W = out.v1_W;
   after1.w_W = out.w1_W;

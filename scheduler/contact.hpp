@@ -29,6 +29,7 @@
 #include "impulse/collision_integrator.hpp"
 #include "impulse/collision_matrix.hpp"
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -48,6 +49,21 @@ struct CollisionRecord {
   double approach_speed = 0.0;    // -u_n before the collision [m/s]
   double energy_change = 0.0;     // kinetic energy of the two bodies after minus before [J]
   bool centre_of_pressure = false;
+  // What the impulse integration saw (impulse/collision_integrator.hpp), for the record only: its
+  // phases in order (slid, stuck stably, resumed sliding, ...; at most one resumes sliding, in
+  // the direction `resumed_direction_W`), the tangential relative contact velocity (the slip)
+  // before and after, and the normal impulse of compression and of restitution (p_z at maximum
+  // compression, and the rest). Over a patch these are of the point the impulse was resolved at,
+  // with the centre-of-pressure rule's constrained inertia. A group's contacts (simultaneous
+  // impacts) have none: `group` is set.
+  bool group = false;
+  std::uint8_t phase_count = 0;
+  std::array<PhaseKind, 6> phases{};
+  Vec3 resumed_direction_W = Vec3::Zero();  // the unit slip direction (world) sliding resumed in
+  Vec3 slip_before_W = Vec3::Zero();
+  Vec3 slip_after_W = Vec3::Zero();
+  double normal_impulse_compression = 0.0;  // [N s]
+  double normal_impulse_restitution = 0.0;  // [N s]
   // Bodies resting on the dynamic body of a microcollision with its support, carried along with
   // it (their velocity along n set to its); energy_change includes them. impulse_W is the
   // support's impulse on the whole stack; a rider settling onto the carrier also takes the

@@ -143,6 +143,7 @@ std::optional<CollisionRecord> Simulation::Impl::collide_group(std::uint32_t ind
     record.n_W = members[i].n_W;
     record.impulse_W = r.impulse_W[i];
     record.approach_speed = members[i].approach;
+    record.group = true;
     // The group's energy change, each body's once: on the first record that names it.
     for (BodyId id : {members[i].a, members[i].b}) {
       const std::size_t j = static_cast<std::size_t>(index_of(id));

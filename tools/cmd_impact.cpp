@@ -2,6 +2,7 @@
 // JSON (tools/lib/impact_spec.hpp documents the format; `palpable impact --help` prints it).
 #include "core/check.hpp"
 #include "tools/commands.hpp"
+#include "tools/lib/atomic_file.hpp"
 #include "tools/lib/exit_codes.hpp"
 #include "tools/lib/impact_spec.hpp"
 
@@ -10,6 +11,7 @@
 #include <iterator>
 #include <memory>
 #include <sstream>
+#include <vector>
 
 namespace {
 
@@ -31,13 +33,31 @@ palpable::tools::CommandRegistration registration{
           "README \"How it works\") and print the result as JSON");
       app.footer(palpable::tools::kImpactSpecHelp);
       auto path = std::make_shared<std::string>();
+      auto trajectory = std::make_shared<std::string>();
       app.add_option("spec", *path, "JSON spec file, or - for standard input")->required();
-      return std::function<int()>([path] {
+      app.add_option("--trajectory", *trajectory,
+                     "also write u(p_z) along the integration as CSV (p_z,p_x,p_y,u_x,u_y,u_z, "
+                     "contact frame: the hodographs of Routh and Stronge); written only when the "
+                     "status is ok, atomically like run's files");
+      return std::function<int()>([path, trajectory] {
+        if (*trajectory == "-") {
+          throw palpable::InputError("--trajectory",
+                                     "standard output carries the result; name a file");
+        }
         const palpable::tools::ImpactSpec spec = palpable::tools::parse_impact_spec_text(
             read_all(*path), *path == "-" ? "<stdin>" : *path);
-        const nlohmann::json result = palpable::tools::resolve_impact(spec);
+        std::unique_ptr<palpable::tools::AtomicFile> file;
+        if (!trajectory->empty()) file = std::make_unique<palpable::tools::AtomicFile>(*trajectory);
+        std::vector<palpable::ImpulsePathPoint> points;
+        const nlohmann::json result =
+            palpable::tools::resolve_impact(spec, file ? &points : nullptr);
+        const bool ok = result["status"] == "ok";
+        if (file && ok) {
+          palpable::tools::write_impulse_path_csv(file->stream(), points);
+          file->commit();
+        }
         std::cout << result.dump() << "\n";
-        return result["status"] == "ok" ? palpable::tools::kExitOk : palpable::tools::kExitFailure;
+        return ok ? palpable::tools::kExitOk : palpable::tools::kExitFailure;
       });
     }};
 

@@ -1,7 +1,9 @@
 # Installs the build into a fresh prefix, then configures, builds and runs tests/install/example
 # against it with find_package(palpable): the library others embed works as installed.
 # Usage: cmake -DBUILD=<build dir> -DSOURCE=<example dir> -DWORK=<scratch dir>
-#              [-DCXX=<compiler>] [-DGENERATOR=<generator>] -P check.cmake
+#              [-DCXX=<compiler>] [-DGENERATOR=<generator>] [-DPYTHON=<python> -DSCENE=<scene>]
+#              -P check.cmake
+# With PYTHON, the installed Python package is imported from the moved prefix and runs SCENE.
 # The prefix is moved after installing, so the package must be relocatable (no absolute paths to
 # the build or the first prefix). The test's verdict is this script's exit status.
 file(REMOVE_RECURSE ${WORK})
@@ -56,4 +58,16 @@ if(NOT rc EQUAL 0)
 endif()
 if(NOT out MATCHES "^first impact at 0\\.451523640[0-9]* s")
   message(FATAL_ERROR "unexpected output from the example: ${out}")
+endif()
+
+if(PYTHON)
+  execute_process(COMMAND ${CMAKE_COMMAND} -E env
+                          PYTHONPATH=${WORK}/prefix/lib/python3/dist-packages ${PYTHON} -c
+                          "import palpable, sys; r = palpable.run(sys.argv[1], end=0.1); print(palpable.__file__, len(r.t))"
+                          ${SCENE}
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0 OR NOT out MATCHES "^${WORK}/prefix/lib/python3/dist-packages/palpable/__init__.py ")
+    message(FATAL_ERROR "the installed Python package did not run from the prefix (${rc}):\n${out}\n${err}")
+  endif()
+  message(STATUS "installed Python package: ${out}")
 endif()

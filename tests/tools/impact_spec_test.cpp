@@ -8,7 +8,9 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <sstream>
 #include <string>
+#include <vector>
 
 namespace palpable::tools {
 namespace {
@@ -72,6 +74,51 @@ TEST_CASE("impact spec with bodies: sphere on fixed ground", "[tools][impact]") 
   CHECK(resolve_impact(parse_impact_spec(alt))["impulse"] == out["impulse"]);
   alt["bodies"][1]["mass"] = "inf";
   CHECK(resolve_impact(parse_impact_spec(alt))["impulse"] == out["impulse"]);
+}
+
+TEST_CASE("impact --trajectory: u(p_z) from u0 to u_final, and recording it changes nothing",
+          "[tools][impact][trajectory]") {
+  // The rod (closed-form segments: slid, then resumed sliding) and a 3D contact whose slip
+  // direction turns (integrated by Dormand-Prince, with dense points inside each step).
+  json turning = rod_spec();
+  turning["K"] = json::parse("[[2.5, 0.3, -1.5], [0.3, 4, 0.5], [-1.5, 0.5, 2.5]]");
+  turning["u0"] = json::array({0.5, 0.4, -1});
+  turning["friction"] = 0.3;
+  turning["law"] = "stronge";
+  for (const json& spec_json : {rod_spec(), turning}) {
+    const ImpactSpec spec = parse_impact_spec(spec_json);
+    std::vector<ImpulsePathPoint> path;
+    const json with = resolve_impact(spec, &path);
+    CHECK(with == resolve_impact(spec));
+    REQUIRE(path.size() >= 3);
+    CHECK(path.front().p_c == Vec3::Zero());
+    CHECK(path.front().u_c == spec.u0_c);
+    const Vec3 p_end(with["impulse"][0].get<double>(), with["impulse"][1].get<double>(),
+                     with["impulse"][2].get<double>());
+    CHECK((path.back().p_c - p_end).norm() <= 1e-15 * p_end.norm());
+    CHECK(path.back().u_c.z() == Approx(with["u_final"][2].get<double>()).epsilon(1e-12));
+    const double p_c = with["compression_impulse"].get<double>();
+    bool compression_end = false;
+    for (std::size_t k = 0; k < path.size(); ++k) {
+      const ImpulsePathPoint& q = path[k];
+      if (k > 0) CHECK(q.p_c.z() >= path[k - 1].p_c.z());
+      // Coulomb along the path, and u = u0 + K p.
+      CHECK(std::hypot(q.p_c.x(), q.p_c.y()) <= spec.params.friction * q.p_c.z() * (1 + 1e-6) + 1e-15);
+      CHECK((q.u_c - (spec.u0_c + spec.K_c * q.p_c)).norm() <= 1e-14);
+      // Compressing before maximum compression, restituting after.
+      if (q.p_c.z() < p_c * (1 - 1e-9)) CHECK(q.u_c.z() < 0.0);
+      if (q.p_c.z() > p_c * (1 + 1e-9)) CHECK(q.u_c.z() > 0.0);
+      if (std::abs(q.p_c.z() - p_c) <= 1e-12 * p_c) compression_end = true;
+    }
+    CHECK(compression_end);  // the point where u_z = 0 is on the path
+  }
+  // The turning slip is integrated: many points, not one per segment.
+  std::vector<ImpulsePathPoint> path;
+  resolve_impact(parse_impact_spec(turning), &path);
+  CHECK(path.size() > 20);
+  std::ostringstream csv;
+  write_impulse_path_csv(csv, path);
+  CHECK(csv.str().rfind("p_z,p_x,p_y,u_x,u_y,u_z\n0,0,0,0.5,0.40000000000000002,-1\n", 0) == 0);
 }
 
 TEST_CASE("bad impact specs name the JSON path, the value and what was expected",

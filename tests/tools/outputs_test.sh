@@ -123,6 +123,15 @@ if command -v gnuplot >/dev/null; then
   check "... no temporary PNG left" "! ls outdir.tmp-* outdir/* >/dev/null 2>&1"
 fi
 
+# impact --trajectory: u(p_z) as CSV, written like run's files; never to stdout, which has the result.
+echo '{"K": [[2.5, 0, -1.5], [0, 4, 0], [-1.5, 0, 2.5]], "u0": [0.5, 0, -1], "friction": 0.5, "restitution": 0.5, "law": "stronge"}' > rod.json
+"$palpable" impact rod.json --trajectory rod_u.csv >rod_out.json 2>&1
+check "impact --trajectory: exit 0" "[[ $? -eq 0 ]]"
+check "... the CSV starts at u0" "head -2 rod_u.csv | tr '\n' ' ' | grep -q '^p_z,p_x,p_y,u_x,u_y,u_z 0,0,0,0.5,0,-1 '"
+check "... and the result is still printed" "grep -q '\"status\":\"ok\"' rod_out.json"
+"$palpable" impact rod.json --trajectory - >/dev/null 2>err.txt
+check "impact --trajectory -: exit 2" "[[ $? -eq 2 ]]"
+
 # Memory independent of simulated time (no output file, no reference: nothing kept).
 if [[ -x /usr/bin/time ]]; then
   short=$(/usr/bin/time -f %M "$palpable" run "$scenes/bowling.json" --end 5 2>&1 >/dev/null | tail -1)

@@ -9,6 +9,9 @@
 #include <cstdio>
 #include <fstream>
 #include <iterator>
+#include <map>
+#include <string>
+#include <vector>
 
 using nlohmann::json;
 using palpable::tools::run_scene;
@@ -258,4 +261,95 @@ TEST_CASE("a trace says how it was made: a sidecar with version, scene hash, ove
   CHECK(palpable::tools::summary_json(r)["provenance"] == side);
   std::remove(options.trace_path.c_str());
   std::remove((options.trace_path + ".json").c_str());
+}
+
+TEST_CASE("a fixed body is written in the first sample only and read back in every one",
+          "[tools][run][trace]") {
+  RunOptions options;
+  options.scene_path = scene("bowling.json");
+  options.end_time = 0.5;
+  options.trace_path = "run_scene_test_fixed.csv";
+  const RunResult r = run_scene(options);
+  std::ifstream in(options.trace_path);
+  std::string line;
+  std::map<std::string, int> rows;
+  std::getline(in, line);
+  while (std::getline(in, line)) ++rows[line.substr(line.find(',') + 1, line.find(',', line.find(',') + 1) - line.find(',') - 1)];
+  const std::size_t samples = r.trace.times.size();
+  REQUIRE(samples > 10);
+  for (const char* fixed : {"lane", "kickback_left", "kickback_right", "pit_cushion"}) {
+    CHECK(rows[fixed] == 1);
+  }
+  CHECK(rows["pin1"] == static_cast<int>(samples));
+  const palpable::Trace back = palpable::read_trace_csv(options.trace_path);
+  REQUIRE(back.samples.size() == samples);
+  for (std::size_t k = 0; k < samples; ++k) {
+    for (std::size_t b = 0; b < back.body_names.size(); ++b) {
+      const palpable::BodyState &x = back.samples[k][b], &y = r.trace.samples[k][b];
+      CHECK(x.t == r.trace.times[k]);
+      CHECK(x.x_W == y.x_W);
+      CHECK(x.q_WM.coeffs() == y.q_WM.coeffs());
+      CHECK(x.v_W == y.v_W);
+    }
+  }
+  std::remove(options.trace_path.c_str());
+  std::remove((options.trace_path + ".json").c_str());
+}
+
+TEST_CASE("events say how each collision went: phases, slip before and after, normal impulses",
+          "[tools][run][events]") {
+  RunOptions options;
+  options.scene_path = scene("pool_break.json");
+  options.end_time = 0.5;
+  options.events_path = "run_scene_test_detail.csv";
+  options.keep_events = true;
+  const RunResult r = run_scene(options);
+  std::ifstream in(options.events_path);
+  std::string header;
+  std::getline(in, header);
+  CHECK(header == std::string(palpable::tools::kEventsCsvHeader));
+  CHECK(header.find(",phases,slip_before_x,slip_before_y,slip_before_z,slip_after_x,slip_after_y,"
+                    "slip_after_z,normal_impulse_compression,normal_impulse_restitution") !=
+        std::string::npos);
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  REQUIRE(lines.size() == r.events.size());
+  std::map<std::string, int> seen;
+  int detailed = 0;
+  for (std::size_t k = 0; k < lines.size(); ++k) {
+    const palpable::tools::EventRow& e = r.events[k];
+    const std::string phases = palpable::tools::phases_text(e);
+    // The CSV row carries the same phases (the 17th column).
+    std::size_t at = 0;
+    for (int c = 0; c < 16; ++c) at = lines[k].find(',', at) + 1;
+    CHECK(lines[k].substr(at, lines[k].find(',', at) - at) == phases);
+    if (!e.detail) continue;
+    ++detailed;
+    int resumed = 0;
+    for (int i = 0; i < e.phase_count; ++i) ++seen[std::string(palpable::to_string(e.phase(i)))];
+    REQUIRE(e.phase_count > 0);
+    // The normal impulse is compression's plus restitution's; both >= 0.
+    const double p_n = e.impulse_W.dot(e.n_W);
+    CHECK(e.normal_impulse_compression >= 0.0);
+    CHECK(e.normal_impulse_restitution >= -1e-12 * p_n);
+    CHECK(e.normal_impulse_compression + e.normal_impulse_restitution ==
+          Approx(p_n).epsilon(1e-9).margin(1e-15));
+    // Slips are tangential; one that ends stuck ends with no slip.
+    CHECK(std::abs(e.slip_before_W.dot(e.n_W)) <= 1e-12 * (1 + e.slip_before_W.norm()));
+    CHECK(std::abs(e.slip_after_W.dot(e.n_W)) <= 1e-12 * (1 + e.slip_after_W.norm()));
+    if (e.phase(e.phase_count - 1) == palpable::PhaseKind::kStuckStably) {
+      CHECK(e.slip_after_W.norm() <= 1e-6 * (e.slip_before_W.norm() + e.approach_speed));
+    }
+    for (int i = 0; i < e.phase_count; ++i) {
+      if (e.phase(i) != palpable::PhaseKind::kResumedSliding) continue;
+      ++resumed;
+      CHECK(e.resumed_direction_W.norm() == Approx(1.0).epsilon(1e-12));
+      CHECK(std::abs(e.resumed_direction_W.dot(e.n_W)) <= 1e-12);
+    }
+    CHECK(resumed <= 1);
+  }
+  CHECK(detailed > 10);
+  CHECK(seen["slid"] > 0);
+  CHECK(seen["stuck stably"] > 0);
+  std::remove(options.events_path.c_str());
 }

@@ -8,6 +8,8 @@
 #include <Eigen/Eigenvalues>
 
 #include <cmath>
+#include <iomanip>
+#include <ostream>
 #include <set>
 
 namespace palpable::tools {
@@ -228,8 +230,19 @@ ImpactSpec parse_impact_spec_text(const std::string& text, const std::string& so
   }
 }
 
-json resolve_impact(const ImpactSpec& spec) {
-  const CollisionResult r = integrate_collision(spec.K_c, spec.u0_c, spec.params);
+void write_impulse_path_csv(std::ostream& out, const std::vector<ImpulsePathPoint>& path) {
+  out << "p_z,p_x,p_y,u_x,u_y,u_z\n";
+  out << std::setprecision(17);
+  for (const ImpulsePathPoint& q : path) {
+    out << q.p_c.z() << ',' << q.p_c.x() << ',' << q.p_c.y() << ',' << q.u_c.x() << ','
+        << q.u_c.y() << ',' << q.u_c.z() << '\n';
+  }
+}
+
+json resolve_impact(const ImpactSpec& spec, std::vector<ImpulsePathPoint>* path) {
+  CollisionParameters params = spec.params;
+  params.path = path;
+  const CollisionResult r = integrate_collision(spec.K_c, spec.u0_c, params);
   json out;
   out["status"] = std::string(to_string(r.status));
   out["law"] = std::string(to_string(spec.params.law));

@@ -10,7 +10,9 @@
 #include <nlohmann/json.hpp>
 
 #include <array>
+#include <iosfwd>
 #include <string>
+#include <vector>
 
 namespace palpable::tools {
 
@@ -33,6 +35,11 @@ ImpactSpec parse_impact_spec(const nlohmann::json& spec);
 ImpactSpec parse_impact_spec_text(const std::string& text, const std::string& source);
 
 // Resolves the collision and describes it: impulse, u_final, energy_change, phases, ...
-nlohmann::json resolve_impact(const ImpactSpec& spec);
+// With `path`, also u(p_z) along the integration (ImpulsePathPoint, contact frame).
+nlohmann::json resolve_impact(const ImpactSpec& spec,
+                              std::vector<ImpulsePathPoint>* path = nullptr);
+
+// The path as CSV: header p_z,p_x,p_y,u_x,u_y,u_z (contact frame, 17 significant digits).
+void write_impulse_path_csv(std::ostream& out, const std::vector<ImpulsePathPoint>& path);
 
 }  // namespace palpable::tools

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <ctime>
 #include <iomanip>
+#include <initializer_list>
 #include <cstdint>
 #include <fstream>
 #include <cstdio>
@@ -29,18 +30,20 @@ void put_number(std::ostream& out, double x) {
 }
 
 // Streams samples into the trace CSV and keeps them in memory for the reference comparison;
-// streams collisions into the events CSV.
+// streams collisions into the events CSV. A fixed body is written once, in the first sample
+// (read_trace_csv repeats it).
 class RunObserver : public SimulationObserver {
  public:
-  RunObserver(const World& world, AtomicFile* trace, AtomicFile* events, Trace* memory, bool keep)
-      : trace_(trace), events_(events), memory_(memory), keep_(keep) {
-    for (const Body& b : world.bodies) names_.push_back(b.name);
+  RunObserver(const World& world, AtomicFile* trace, AtomicFile* events, Trace* memory, bool keep,
+              std::deque<EventRow>* kept_events)
+      : trace_(trace), events_(events), memory_(memory), keep_(keep), kept_events_(kept_events) {
+    for (const Body& b : world.bodies) {
+      names_.push_back(b.name);
+      fixed_.push_back(b.motion == MotionKind::kFixed);
+    }
     memory_->body_names = names_;
     if (trace_) trace_->stream() << kTraceHeader << "\n";
-    if (events_) {
-      events_->stream() << "t,kind,body_a,body_b,px,py,pz,nx,ny,nz,jx,jy,jz,approach_speed,"
-                           "energy_change,centre_of_pressure\n";
-    }
+    if (events_) events_->stream() << kEventsCsvHeader << "\n";
   }
   void on_sample(double t, const std::vector<BodyState>& states) override {
     for (const BodyState& s : states) {
@@ -50,53 +53,139 @@ class RunObserver : public SimulationObserver {
                                  " (no trace written)");
       }
     }
-    if (trace_) write_trace_rows(trace_->stream(), t, names_, states);
+    if (trace_) {
+      if (first_sample_) {
+        write_trace_rows(trace_->stream(), t, names_, states);
+        first_sample_ = false;
+      } else {
+        write_trace_rows(trace_->stream(), t, names_, states, &fixed_);
+      }
+    }
     if (!keep_) return;
     memory_->times.push_back(t);
     memory_->samples.push_back(states);
   }
   void on_collision(const CollisionRecord& r) override {
     if (keep_) memory_->contacts.push_back(ContactEvent{r.t, r.a.index, r.b.index, r.p_W});
-    if (!events_) return;
-    std::ostream& out = events_->stream();
-    put_number(out, r.t);
-    out << ',' << (r.kind == CollisionKind::kMicrocollision ? "microcollision" : "collision") << ','
-        << names_[r.a.index] << ',' << names_[r.b.index];
-    for (const Vec3* v : {&r.p_W, &r.n_W, &r.impulse_W}) {
-      for (int i = 0; i < 3; ++i) {
-        out << ',';
-        put_number(out, (*v)[i]);
-      }
-    }
-    out << ',';
-    put_number(out, r.approach_speed);
-    out << ',';
-    put_number(out, r.energy_change);
-    out << ',' << (r.centre_of_pressure ? 1 : 0) << '\n';
+    if (!events_ && !kept_events_) return;
+    const EventRow row = event_row(r);
+    if (events_) write_event_row(events_->stream(), row, names_);
+    if (kept_events_) kept_events_->push_back(row);
   }
   // A held contact changing mode (persistent contact model): a row of its own kind, at the
   // contact's reference point, with no impulse.
   void on_mode_change(const ModeChange& m) override {
-    if (!events_) return;
-    std::ostream& out = events_->stream();
-    put_number(out, m.t);
-    out << ',' << m.kind << ',' << names_[m.a.index] << ',' << names_[m.b.index];
-    for (int i = 0; i < 3; ++i) {
-      out << ',';
-      put_number(out, m.p_W[i]);
-    }
-    out << ",0,0,0,0,0,0,0,0,0\n";
+    if (!events_ && !kept_events_) return;
+    const EventRow row = event_row(m);
+    if (events_) write_event_row(events_->stream(), row, names_);
+    if (kept_events_) kept_events_->push_back(row);
   }
 
  private:
   std::vector<std::string> names_;
+  std::vector<bool> fixed_;  // written in the first sample only
+  bool first_sample_ = true;
   AtomicFile* trace_;
   AtomicFile* events_;
   Trace* memory_;
   bool keep_;  // samples and contacts kept in memory
+  std::deque<EventRow>* kept_events_;
 };
 
 }  // namespace
+
+const char* const kEventsCsvHeader =
+    "t,kind,body_a,body_b,px,py,pz,nx,ny,nz,jx,jy,jz,approach_speed,energy_change,"
+    "centre_of_pressure,phases,slip_before_x,slip_before_y,slip_before_z,slip_after_x,"
+    "slip_after_y,slip_after_z,normal_impulse_compression,normal_impulse_restitution";
+
+EventRow event_row(const CollisionRecord& r) {
+  EventRow row;
+  row.t = r.t;
+  row.kind = r.kind == CollisionKind::kMicrocollision ? "microcollision" : "collision";
+  row.a = r.a.index;
+  row.b = r.b.index;
+  row.p_W = r.p_W;
+  row.n_W = r.n_W;
+  row.impulse_W = r.impulse_W;
+  row.approach_speed = r.approach_speed;
+  row.energy_change = r.energy_change;
+  row.centre_of_pressure = r.centre_of_pressure;
+  row.group = r.group;
+  row.detail = !r.group;
+  row.phase_count = r.phase_count;
+  for (int i = 0; i < r.phase_count; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    row.phases[k] = static_cast<std::uint8_t>(r.phases[k]);
+  }
+  row.resumed_direction_W = r.resumed_direction_W;
+  row.slip_before_W = r.slip_before_W;
+  row.slip_after_W = r.slip_after_W;
+  row.normal_impulse_compression = r.normal_impulse_compression;
+  row.normal_impulse_restitution = r.normal_impulse_restitution;
+  return row;
+}
+
+EventRow event_row(const ModeChange& m) {
+  EventRow row;
+  row.t = m.t;
+  row.kind = m.kind;
+  row.a = m.a.index;
+  row.b = m.b.index;
+  row.p_W = m.p_W;
+  return row;
+}
+
+std::string phases_text(const EventRow& row) {
+  if (row.group) return "group";
+  std::ostringstream out;
+  out << std::setprecision(6);
+  for (int i = 0; i < row.phase_count; ++i) {
+    if (i > 0) out << ';';
+    switch (row.phase(i)) {
+      case PhaseKind::kFrictionless: out << "frictionless"; break;
+      case PhaseKind::kSlid: out << "slid"; break;
+      case PhaseKind::kStuckStably: out << "stuck"; break;
+      case PhaseKind::kResumedSliding: {
+        const Vec3& d = row.resumed_direction_W;
+        out << "resumed_sliding(" << d.x() << ' ' << d.y() << ' ' << d.z() << ')';
+        break;
+      }
+      case PhaseKind::kReboundFloor: out << "rebound_floor"; break;
+      case PhaseKind::kReversed: out << "reversed"; break;
+      case PhaseKind::kDriftFreeTarget: out << "drift_free_target"; break;
+      case PhaseKind::kDriftFreeConeBoundary: out << "drift_free_cone_boundary"; break;
+      case PhaseKind::kMicroFallback: out << "micro_fallback"; break;
+    }
+  }
+  return out.str();
+}
+
+void write_event_row(std::ostream& out, const EventRow& row, const std::vector<std::string>& names) {
+  auto number = [&out](double x) {
+    out << ',';
+    put_number(out, x);
+  };
+  auto vectors = [&number](std::initializer_list<const Vec3*> vs) {
+    for (const Vec3* v : vs) {
+      for (int i = 0; i < 3; ++i) number((*v)[i]);
+    }
+  };
+  put_number(out, row.t);
+  out << ',' << row.kind << ',' << names[row.a] << ',' << names[row.b];
+  vectors({&row.p_W, &row.n_W, &row.impulse_W});
+  number(row.approach_speed);
+  number(row.energy_change);
+  out << ',' << (row.centre_of_pressure ? 1 : 0) << ',' << phases_text(row);
+  if (!row.detail) {
+    out << ",,,,,,,,\n";  // no slips or normal impulses: a mode change, or a group's contact
+    return;
+  }
+  vectors({&row.slip_before_W, &row.slip_after_W});
+  number(row.normal_impulse_compression);
+  number(row.normal_impulse_restitution);
+  out << '\n';
+}
 
 namespace {
 
@@ -135,7 +224,8 @@ RunResult run_scene(const RunOptions& options) {
   if (!options.trace_path.empty()) trace_file = std::make_unique<AtomicFile>(options.trace_path);
   if (!options.events_path.empty()) events_file = std::make_unique<AtomicFile>(options.events_path);
   RunObserver observer(scene.world, trace_file.get(), events_file.get(), &result.trace,
-                       options.keep_trace || !scene.reference.is_null());
+                       options.keep_trace || !scene.reference.is_null(),
+                       options.keep_events ? &result.events : nullptr);
 
   const auto wall_start = std::chrono::steady_clock::now();
   const std::clock_t cpu_start = std::clock();

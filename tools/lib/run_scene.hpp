@@ -8,11 +8,50 @@
 
 #include <nlohmann/json.hpp>
 
+#include <array>
+#include <cstdint>
+#include <deque>
+#include <iosfwd>
 #include <optional>
 #include <string>
 #include <vector>
 
 namespace palpable::tools {
+
+// One row of the events table: a collision (or microcollision), or under the persistent contact
+// model a held contact's change of mode. The events CSV writes these; the Python module keeps
+// them (RunOptions::keep_events).
+// Compact (216 bytes): the Python module keeps one per event.
+struct EventRow {
+  double t = 0.0;
+  const char* kind = "";  // collision, microcollision, or a mode change: hold, stick, slip, ...
+  std::uint32_t a = 0, b = 0;  // body indices
+  Vec3 p_W = Vec3::Zero(), n_W = Vec3::Zero(), impulse_W = Vec3::Zero();
+  double approach_speed = 0.0, energy_change = 0.0;
+  bool centre_of_pressure = false;
+  // A collision resolved by the impulse integration: its phases, slips and normal impulses
+  // (CollisionRecord). False for mode changes and a group's contacts (kind "collision",
+  // phases "group").
+  bool detail = false;
+  bool group = false;
+  std::uint8_t phase_count = 0;
+  std::array<std::uint8_t, 6> phases{};  // PhaseKind values
+  Vec3 resumed_direction_W = Vec3::Zero();
+  Vec3 slip_before_W = Vec3::Zero(), slip_after_W = Vec3::Zero();
+  double normal_impulse_compression = 0.0, normal_impulse_restitution = 0.0;
+  PhaseKind phase(int i) const { return static_cast<PhaseKind>(phases[static_cast<std::size_t>(i)]); }
+};
+EventRow event_row(const CollisionRecord& record);
+EventRow event_row(const ModeChange& change);
+
+// The phases as one CSV-safe word list, in order, separated by ';': frictionless, slid, stuck,
+// resumed_sliding(dx dy dz) (the slip direction, world frame), rebound_floor, reversed,
+// drift_free_target, drift_free_cone_boundary, micro_fallback; "group" for a group's contact.
+std::string phases_text(const EventRow& row);
+
+// The events CSV header and one row.
+extern const char* const kEventsCsvHeader;
+void write_event_row(std::ostream& out, const EventRow& row, const std::vector<std::string>& names);
 
 struct RunOptions {
   std::string scene_path;              // "-": standard input
@@ -26,6 +65,8 @@ struct RunOptions {
   // Keep every sample and contact in RunResult::trace. Off, they are kept only when the scene's
   // reference needs them, so memory does not grow with simulated time (the command line).
   bool keep_trace = true;
+  // Keep every event row in RunResult::events (the Python module).
+  bool keep_events = false;
 };
 
 struct RunResult {
@@ -34,6 +75,9 @@ struct RunResult {
   double wall_time_s = 0.0;
   double cpu_time_s = 0.0;
   Trace trace;               // the samples, in memory (see RunOptions::keep_trace)
+  // Every event row (see RunOptions::keep_events); a deque: no copying as it grows, and its
+  // blocks come from the heap, reused by the next run instead of faulted in afresh.
+  std::deque<EventRow> events;
   nlohmann::json reference;  // error figures against the scene's reference (null if none)
   // How the run was made: palpable version and commit, scene path and the FNV-1a hash of its
   // text, every override, the end time, and every setting in effect (derived ones included).

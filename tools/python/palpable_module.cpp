@@ -14,10 +14,13 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <deque>
+#include <limits>
 #include <memory>
 #include <optional>
 
 namespace py = pybind11;
+using namespace pybind11::literals;
 using namespace palpable;
 
 namespace {
@@ -58,12 +61,83 @@ py::dict trace_arrays(const Trace& trace) {
   return out;
 }
 
+// A run's events, kept in C++ and turned into numpy columns only when asked (a fine envelope
+// makes hundreds of thousands of them; a run whose events are not read pays nothing for them).
+class EventTable {
+ public:
+  EventTable(std::deque<tools::EventRow> rows, std::vector<std::string> names)
+      : rows_(std::move(rows)), names_(std::move(names)) {}
+  std::size_t size() const { return rows_.size(); }
+  // The columns of the events CSV, each a numpy array (kind, body_a, body_b, phases: str).
+  py::dict columns() const {
+    const auto n = static_cast<py::ssize_t>(rows_.size());
+    py::dict out;
+    auto numbers = [&](const char* name, auto get) {
+      py::array_t<double> a(n);
+      auto m = a.mutable_unchecked<1>();
+      for (py::ssize_t k = 0; k < n; ++k) m(k) = get(rows_[static_cast<std::size_t>(k)]);
+      out[name] = a;
+    };
+    auto strings = [&](const char* name, auto get) {
+      py::list l(static_cast<std::size_t>(n));
+      for (py::ssize_t k = 0; k < n; ++k) {
+        l[static_cast<std::size_t>(k)] = py::str(get(rows_[static_cast<std::size_t>(k)]));
+      }
+      out[name] = py::module_::import("numpy").attr("array")(l, "dtype"_a = "U");
+    };
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    numbers("t", [](const tools::EventRow& r) { return r.t; });
+    strings("kind", [](const tools::EventRow& r) { return std::string(r.kind); });
+    strings("body_a", [&](const tools::EventRow& r) { return names_[r.a]; });
+    strings("body_b", [&](const tools::EventRow& r) { return names_[r.b]; });
+    const char* axes[] = {"x", "y", "z"};
+    for (int i = 0; i < 3; ++i) {
+      numbers(("p" + std::string(axes[i])).c_str(), [i](const tools::EventRow& r) { return r.p_W[i]; });
+    }
+    for (int i = 0; i < 3; ++i) {
+      numbers(("n" + std::string(axes[i])).c_str(), [i](const tools::EventRow& r) { return r.n_W[i]; });
+    }
+    for (int i = 0; i < 3; ++i) {
+      numbers(("j" + std::string(axes[i])).c_str(),
+              [i](const tools::EventRow& r) { return r.impulse_W[i]; });
+    }
+    numbers("approach_speed", [](const tools::EventRow& r) { return r.approach_speed; });
+    numbers("energy_change", [](const tools::EventRow& r) { return r.energy_change; });
+    numbers("centre_of_pressure",
+            [](const tools::EventRow& r) { return r.centre_of_pressure ? 1.0 : 0.0; });
+    strings("phases", [](const tools::EventRow& r) { return tools::phases_text(r); });
+    // Slips and normal impulses: NaN where there are none (mode changes, a group's contacts).
+    for (int i = 0; i < 3; ++i) {
+      numbers(("slip_before_" + std::string(axes[i])).c_str(), [i, nan](const tools::EventRow& r) {
+        return r.detail ? r.slip_before_W[i] : nan;
+      });
+    }
+    for (int i = 0; i < 3; ++i) {
+      numbers(("slip_after_" + std::string(axes[i])).c_str(), [i, nan](const tools::EventRow& r) {
+        return r.detail ? r.slip_after_W[i] : nan;
+      });
+    }
+    numbers("normal_impulse_compression", [nan](const tools::EventRow& r) {
+      return r.detail ? r.normal_impulse_compression : nan;
+    });
+    numbers("normal_impulse_restitution", [nan](const tools::EventRow& r) {
+      return r.detail ? r.normal_impulse_restitution : nan;
+    });
+    return out;
+  }
+
+ private:
+  std::deque<tools::EventRow> rows_;
+  std::vector<std::string> names_;
+};
+
 py::dict run(const std::string& path, const std::vector<std::string>& overrides,
-             std::optional<double> end) {
+             std::optional<double> end, bool keep_events) {
   tools::RunOptions options;
   options.scene_path = path;
   options.overrides = overrides;
   options.end_time = end;
+  options.keep_events = keep_events;
   tools::RunResult r;
   {
     py::gil_scoped_release release;  // the simulation needs no Python
@@ -83,6 +157,7 @@ py::dict run(const std::string& path, const std::vector<std::string>& overrides,
     for (int j = 0; j < 6; ++j) c(k, j) = row[j];
   }
   out["contacts"] = contacts;
+  out["events"] = EventTable(std::move(r.events), r.trace.body_names);
   return out;
 }
 
@@ -110,6 +185,7 @@ class PySimulation {
   }
   py::dict state(const std::string& name) const {
     const BodyId id = scene_->world.find_body(name);
+    if (!id.valid()) throw py::key_error("no body named \"" + name + "\" in the scene");
     const BodyState s = sim_->state_at(id, sim_->time());
     py::dict d;
     d["x"] = py::make_tuple(s.x_W.x(), s.x_W.y(), s.x_W.z());
@@ -148,16 +224,36 @@ PYBIND11_MODULE(_palpable, m) {
     }
   });
   m.def("run", &run, py::arg("path"), py::arg("overrides") = std::vector<std::string>{},
-        py::arg("end") = std::nullopt,
+        py::arg("end") = std::nullopt, py::arg("keep_events") = true,
         "Run a scene file through `palpable run`'s code path; returns t, bodies, states "
         "(samples x bodies x 13), contacts and the summary dict.");
+  py::class_<EventTable>(m, "EventTable")
+      .def("__len__", &EventTable::size)
+      .def("columns", &EventTable::columns, "the events CSV's columns as numpy arrays");
   m.def(
       "impact",
-      [](const py::object& spec) {
+      [](const py::object& spec, bool trajectory) {
         const tools::ImpactSpec s = tools::parse_impact_spec(from_python(spec, "spec"));
-        return to_python(tools::resolve_impact(s));
+        std::vector<ImpulsePathPoint> points;
+        py::object out = to_python(tools::resolve_impact(s, trajectory ? &points : nullptr));
+        if (trajectory) {
+          // u(p_z) along the integration: p_z, p_x, p_y, u_x, u_y, u_z (contact frame), the
+          // columns of `palpable impact --trajectory`.
+          py::array_t<double> a({static_cast<py::ssize_t>(points.size()), py::ssize_t{6}});
+          auto m = a.mutable_unchecked<2>();
+          for (std::size_t k = 0; k < points.size(); ++k) {
+            const auto i = static_cast<py::ssize_t>(k);
+            const ImpulsePathPoint& q = points[k];
+            const double row[6] = {q.p_c.z(), q.p_c.x(), q.p_c.y(), q.u_c.x(), q.u_c.y(), q.u_c.z()};
+            for (int c = 0; c < 6; ++c) m(i, c) = row[c];
+          }
+          out["trajectory"] = a;
+        }
+        return out;
       },
-      py::arg("spec"), "Resolve one collision; the same spec and result as `palpable impact`.");
+      py::arg("spec"), py::arg("trajectory") = false,
+      "Resolve one collision; the same spec and result as `palpable impact` (with trajectory, "
+      "also u(p_z) as an array: p_z, p_x, p_y, u_x, u_y, u_z).");
   py::class_<PySimulation>(m, "Simulation")
       .def(py::init<const std::string&, const std::vector<std::string>&>(), py::arg("path"),
            py::arg("overrides") = std::vector<std::string>{})

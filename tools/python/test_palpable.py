@@ -77,10 +77,28 @@ def test_the_ramp_study_runs_and_is_exact_under_the_persistent_model():
     spec.loader.exec_module(study)
     rows = study.study()
     assert len(rows) == 16
-    stopped = [f["persistent"] for _, _, f in rows if "premise_failed" not in f["persistent"]]
-    assert len(stopped) >= 10
-    assert all(abs(p["stop_time_error_s"]) < 1e-9 for p in stopped)
-    print(study.table(rows))
+    regimes = [c["regime"] for _, _, c, _ in rows]
+    assert regimes.count("stops") >= 8 and "accelerates" in regimes
+    for _, _, c, sims in rows:
+        p, m = sims["persistent"], sims["microcollisions"]
+        if c["regime"] == "stops":
+            # Persistent: the stick event at t* to rounding, and the block stays where it stopped.
+            assert p["t"] == pytest.approx(c["t"], abs=1e-9)
+            assert p["d"] == pytest.approx(c["d"], abs=1e-9)
+            # Microcollisions: within half a flight, and the rest position within the envelope's
+            # scale.
+            assert m["t"] == pytest.approx(c["t"], abs=2e-2)
+            assert m["d"] == pytest.approx(c["d"], abs=2e-3)
+        elif c["regime"] == "accelerates":
+            assert p["acceleration"] == pytest.approx(c["acceleration"], abs=1e-6)
+            assert p["d"] == pytest.approx(c["d_end"], abs=1e-9)
+        else:
+            assert p["d"] == pytest.approx(c["d_end"], abs=1e-9)
+    # The README shows this table, as made here.
+    with open(os.path.join(ROOT, "README.md")) as f:
+        readme = f.read()
+    shown = readme.split("<!-- ramp-study:begin -->\n")[1].split("<!-- ramp-study:end -->")[0]
+    assert shown == study.table(rows) + "\n"
 
 
 def test_the_readme_quick_start_runs_as_written(capsys, monkeypatch):
@@ -102,3 +120,71 @@ def test_impact_of_a_value_json_cannot_carry_or_nested_too_deep_is_an_input_erro
     deep = json.loads("[" * 600 + "]" * 600)
     with pytest.raises(palpable.InputError, match=r"^spec: nested deeper than 256 levels"):
         palpable.impact({"K": deep})
+
+
+POOL = os.path.join(ROOT, "scenarios", "pool_break.json")
+
+
+def test_events_carry_each_collisions_phases_slips_and_normal_impulses():
+    r = palpable.run(POOL, end=0.5)
+    e = r.events
+    n = len(e["t"])
+    assert n > 10 and all(len(column) == n for column in e.values())
+    collided = (e["kind"] == "collision") | (e["kind"] == "microcollision")
+    detail = collided & (e["phases"] != "group")
+    assert detail.sum() > 10
+    phases = set(w.split("(")[0] for p in e["phases"][detail] for w in p.split(";"))
+    assert {"slid", "stuck"} <= phases
+    # Normal impulse = compression + restitution, both >= 0; slips are tangential.
+    p_n = e["jx"] * e["nx"] + e["jy"] * e["ny"] + e["jz"] * e["nz"]
+    total = e["normal_impulse_compression"] + e["normal_impulse_restitution"]
+    assert np.allclose(total[detail], p_n[detail], rtol=1e-9, atol=1e-15)
+    assert np.all(e["normal_impulse_compression"][detail] >= 0)
+    before = np.stack([e["slip_before_x"], e["slip_before_y"], e["slip_before_z"]], axis=1)
+    normal = np.stack([e["nx"], e["ny"], e["nz"]], axis=1)
+    assert np.all(np.abs((before * normal).sum(axis=1)[detail]) <= 1e-9)
+    stuck = detail & np.array([p.endswith("stuck") for p in e["phases"]])
+    after = np.stack([e["slip_after_x"], e["slip_after_y"], e["slip_after_z"]], axis=1)
+    assert stuck.sum() > 0
+    assert np.all(np.linalg.norm(after[stuck], axis=1)
+                  <= 1e-6 * (np.linalg.norm(before[stuck], axis=1) + e["approach_speed"][stuck]))
+    # The contacts array is the collisions of the events table.
+    assert len(r.contacts) == collided.sum()
+
+
+def test_events_and_the_trace_as_pandas_data_frames():
+    pd = pytest.importorskip("pandas")
+    r = palpable.run(RAMP, set={"/settings/contact_model": "persistent"})
+    events = r.events_frame()
+    assert isinstance(events, pd.DataFrame)
+    assert "stick" in set(events["kind"])
+    stop = events[events["kind"] == "stick"]["t"].iloc[0]
+    assert stop == pytest.approx(r.reference["stop_time_closed_form_s"], abs=1e-9)
+    trace = r.frame()
+    assert list(trace.columns[:3]) == ["t", "body", "x"]
+    assert len(trace) == len(r.t) * len(r.bodies)
+
+
+def test_impact_trajectory_is_u_of_p_z_from_u0_to_u_final():
+    spec = {"K": [[2.5, 0, -1.5], [0, 4, 0], [-1.5, 0, 2.5]], "u0": [0.5, 0, -1],
+            "friction": 0.5, "restitution": 0.5, "law": "stronge"}
+    out = palpable.impact(spec, trajectory=True)
+    path = out["trajectory"]
+    assert path.shape[1] == 6
+    assert list(path[0]) == [0, 0, 0, 0.5, 0, -1]
+    assert np.all(np.diff(path[:, 0]) >= 0)
+    assert path[-1, 0] == pytest.approx(out["impulse"][2], rel=1e-15)
+    assert list(path[-1, 3:]) == pytest.approx(out["u_final"], rel=1e-12, abs=1e-15)
+    assert "trajectory" not in palpable.impact(spec)
+
+
+def test_state_of_an_unknown_body_is_a_key_error():
+    sim = palpable.Simulation(RAMP)
+    with pytest.raises(KeyError, match="no body named"):
+        sim.state("nothing")
+
+
+def test_a_run_may_keep_no_events():
+    r = palpable.run(RAMP, events=False)
+    assert len(r.events["t"]) == 0 and len(r.contacts) > 0
+    assert r.events["phases"].shape == (0,)

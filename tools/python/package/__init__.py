@@ -12,10 +12,18 @@ import json
 import os
 import tempfile
 
-import numpy as np
+import sys
 
-from ._palpable import InputError, Simulation as _Simulation, __version__, commit
-from . import _palpable
+try:
+    import numpy as np
+    from ._palpable import InputError, Simulation as _Simulation, __version__, commit
+    from . import _palpable
+except ImportError as e:  # another interpreter than the one the module was built for
+    raise ImportError(
+        "palpable: %s. The module is built for one Python (CMake's Python3_EXECUTABLE, the Debian "
+        "/usr/bin/python3 by default) and needs its numpy (Debian python3-numpy, installed by "
+        "tools/setup); this is %s (Python %d.%d)."
+        % (e, sys.executable, sys.version_info[0], sys.version_info[1])) from e
 
 __all__ = ["run", "impact", "sweep", "Simulation", "Result", "InputError", "__version__"]
 
@@ -51,7 +59,8 @@ class _SceneFile:
 
 class Result:
     """A run: t (samples), bodies, states[name] (samples x 13), summary (dict), contacts (an array
-    of collisions: t, body_a index, body_b index, px, py, pz)."""
+    of collisions: t, body_a index, body_b index, px, py, pz), events (the events CSV's columns as
+    numpy arrays, made on first use), reference (the summary's closed-form figures)."""
 
     def __init__(self, raw):
         self.t = raw["t"]
@@ -61,9 +70,28 @@ class Result:
         self.summary = raw["summary"]
         self.contacts = raw["contacts"]
         self.reference = self.summary.get("reference")
+        self._event_table = raw["events"]
+        self._events = None
+
+    @property
+    def events(self):
+        """Every event row as a dict of numpy arrays, the columns of `palpable run --events`: t,
+        kind, body_a, body_b, px..pz (contact point), nx..nz (normal, from b to a), jx..jz
+        (impulse on a), approach_speed, energy_change, centre_of_pressure, phases ("slid;stuck",
+        "slid;resumed_sliding(dx dy dz)", ...), slip_before_*, slip_after_* (tangential relative
+        contact velocity, world frame), normal_impulse_compression, normal_impulse_restitution
+        (NaN where a row has none: a mode change, a group's contact)."""
+        if self._events is None:
+            self._events = self._event_table.columns()
+        return self._events
+
+    def events_frame(self):
+        """The events as a pandas DataFrame (needs pandas)."""
+        import pandas as pd
+        return pd.DataFrame(self.events)
 
     def frame(self):
-        """The trace as a pandas DataFrame (one row per body per sample), if pandas is present."""
+        """The trace as a pandas DataFrame (one row per body per sample; needs pandas)."""
         import pandas as pd
         n, m = len(self.t), len(self.bodies)
         df = pd.DataFrame(self._states.reshape(n * m, 13), columns=_COLUMNS)
@@ -72,15 +100,19 @@ class Result:
         return df
 
 
-def run(scene, set=None, end=None):
-    """Run a scene (path or dict) with overrides; returns a Result."""
+def run(scene, set=None, end=None, events=True):
+    """Run a scene (path or dict) with overrides; returns a Result. events=False keeps no event
+    rows (r.events is then empty; r.contacts is still there): a run whose microcollisions number
+    hundreds of thousands keeps ~216 bytes for each otherwise."""
     with _SceneFile(scene) as path:
-        return Result(_palpable.run(path, _overrides(set), end))
+        return Result(_palpable.run(path, _overrides(set), end, events))
 
 
-def impact(spec):
-    """Resolve one collision: the spec and the result of `palpable impact`, as dicts."""
-    return _palpable.impact(spec)
+def impact(spec, trajectory=False):
+    """Resolve one collision: the spec and the result of `palpable impact`, as dicts. With
+    trajectory=True the result also has "trajectory": u(p_z) along the integration, an array of
+    rows p_z, p_x, p_y, u_x, u_y, u_z (contact frame; `palpable impact --trajectory`)."""
+    return _palpable.impact(spec, trajectory)
 
 
 def sweep(scene, vary, figure, set=None):
