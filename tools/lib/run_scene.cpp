@@ -9,11 +9,11 @@
 
 #include <chrono>
 #include <cmath>
-#include <ctime>
-#include <iomanip>
 #include <cstdint>
-#include <fstream>
 #include <cstdio>
+#include <ctime>
+#include <fstream>
+#include <iomanip>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -56,7 +56,10 @@ class RunObserver : public SimulationObserver {
     memory_->samples.push_back(states);
   }
   void on_collision(const CollisionRecord& r) override {
-    if (keep_) memory_->contacts.push_back(ContactEvent{r.t, r.a.index, r.b.index, r.p_W});
+    if (keep_) {
+      memory_->contacts.push_back(ContactEvent{r.t, r.a.index, r.b.index, r.p_W, r.n_W, r.impulse_W,
+                                               r.kind == CollisionKind::kMicrocollision});
+    }
     if (!events_) return;
     std::ostream& out = events_->stream();
     put_number(out, r.t);
