@@ -354,8 +354,10 @@ std::string line_plot(const Trace& trace, const fs::path& dir) {
       write_body_blocks(trace, moving, dir, [axis](const BodyState& s) {
         return std::vector<double>{s.x_W[axis], s.v_W[axis]};
       });
-  return panels_plot(std::string("Bodies on a line: position and velocity along ") + name +
-                         " (the momentum passing from body to body)",
+  return panels_plot(names.size() == 1
+                         ? std::string("Position and velocity along ") + name
+                         : std::string("Bodies on a line: position and velocity along ") + name +
+                               " (the momentum passing from body to body)",
                      names,
                      {{{std::string("Position ") + name, std::string(name) + " [m]"}},
                       {{std::string("Velocity v_") + name, std::string("v_") + name + " [m/s]"}}});
