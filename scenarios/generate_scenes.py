@@ -176,6 +176,7 @@ def coins():
     write("coins.json", {
         "format": "palpable-scene/1", "name": "coins",
         "description": "Five coins (US quarters: r = 12.13 mm, 1.75 mm thick, 5.67 g, as 32-gon prisms) dropped from 6 to 20 cm with tilts, spins of 10 to 40 rad/s about their axes and sideways speeds onto a table (coin-table mu = 0.3, e = 0.5). They bounce on their rims, rock, land flat, slide and spin down to rest: the spin about the normal is taken out by torsional friction over the face. Mirtich & Canny: 3.6 s virtual, 50 s real in 1995.",
+        "plot": "tumble",
         "gravity": G, "end_time": 3.6, "output": {"interval": 0.01},
         "settings": {"envelope": 1e-4},
         "materials": {"default": {"friction": 0.3, "restitution": 0.5}},

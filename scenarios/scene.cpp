@@ -8,6 +8,7 @@
 #include "core/mass_properties.hpp"
 #include "core/shape.hpp"
 
+#include <algorithm>
 #include <climits>
 #include <cmath>
 #include <fstream>
@@ -292,8 +293,8 @@ void check_ranges(const Reader& r, const json& doc, const Scene& scene) {
   // train throws it about; below the rounding of the scene's coordinates, the clock cannot move.
   if (std::isfinite(smallest) && s.envelope_m > 0.5 * smallest) {
     r.fail_value("/settings/envelope", value("envelope"),
-                 "at most half the smallest dynamic body's radius (" + std::to_string(0.5 * smallest) +
-                     " m)");
+                 "at most half the smallest dynamic body's radius (" +
+                     std::to_string(0.5 * smallest) + " m)");
   }
   if (s.envelope_m < 1e-13 * extent) {
     r.fail_value("/settings/envelope", value("envelope"),
@@ -330,7 +331,7 @@ Scene scene_from_json(const json& document, const std::string& source) {
   r.object(doc, "");
   r.only_keys(doc, "",
               {"format", "name", "description", "parameters", "gravity", "end_time", "output",
-               "settings", "materials", "bodies", "reference"});
+               "settings", "materials", "bodies", "reference", "plot"});
   std::string format = r.string(r.required(doc, "", "format"), "/format");
   if (format != "palpable-scene/1") r.fail_value("/format", doc["format"], "\"palpable-scene/1\"");
 
@@ -338,6 +339,17 @@ Scene scene_from_json(const json& document, const std::string& source) {
   scene.source = source;
   scene.name = doc.contains("name") ? r.string(doc["name"], "/name") : source;
   if (doc.contains("description")) r.string(doc["description"], "/description");
+  if (doc.contains("plot")) {
+    const auto& kinds = scene_plot_kinds();
+    scene.plot = doc["plot"].is_string() ? doc["plot"].get<std::string>() : std::string();
+    if (std::find(kinds.begin(), kinds.end(), scene.plot) == kinds.end()) {
+      std::string expected;
+      for (const std::string& k : kinds)
+        expected += (expected.empty() ? "one of \"" : ", \"") + k + "\"";
+      r.fail_value("/plot", doc["plot"],
+                   expected + " (the picture palpable plot --kind auto draws)");
+    }
+  }
   if (doc.contains("gravity")) scene.world.gravity_W = r.vec3(doc["gravity"], "/gravity");
   scene.end_time = r.positive(r.required(doc, "", "end_time"), "/end_time");
 

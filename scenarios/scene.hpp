@@ -18,7 +18,15 @@ struct Scene {
   double output_interval = 0.0;  // [s]; 0: no samples
   World world;
   nlohmann::json reference;  // the closed-form reference the scene names, or null
+  std::string plot;          // the picture `palpable plot --kind auto` draws ("": its own choice)
 };
+
+// The values a scene's "plot" hint may take (`palpable plot`'s kinds, auto excepted).
+inline const std::vector<std::string>& scene_plot_kinds() {
+  static const std::vector<std::string> kinds = {"series",    "top",  "incline",
+                                                 "turntable", "line", "tumble"};
+  return kinds;
+}
 
 // Parses and validates. Throws InputError whose where() is "<source>:<json pointer>".
 Scene scene_from_json(const nlohmann::json& document, const std::string& source);

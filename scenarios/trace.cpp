@@ -122,6 +122,7 @@ Trace read_trace_csv(const std::string& path) {
 
 void read_events_csv(const std::string& path, Trace& trace) {
   static constexpr const char* kEventsHeader = "t,kind,body_a,body_b,px,py,pz";
+  static constexpr const char* kImpulseHeader = "t,kind,body_a,body_b,px,py,pz,nx,ny,nz,jx,jy,jz";
   std::ifstream in(path);
   if (!in) throw InputError(path, "cannot open events file");
   std::string line;
@@ -129,7 +130,10 @@ void read_events_csv(const std::string& path, Trace& trace) {
     throw InputError(path + ":1",
                      std::string("expected the events header \"") + kEventsHeader + ",...\"");
   }
+  const bool impulses = line.rfind(kImpulseHeader, 0) == 0;
+  const std::size_t numbers = impulses ? 10 : 4;  // t, p, then n and j
   std::vector<ContactEvent> contacts;
+  std::vector<HeldEvent> held;
   std::size_t line_number = 1;
   while (std::getline(in, line)) {
     ++line_number;
@@ -139,27 +143,41 @@ void read_events_csv(const std::string& path, Trace& trace) {
     std::stringstream ss(line);
     std::string field;
     while (std::getline(ss, field, ',')) fields.push_back(field);
-    if (fields.size() < 7) throw InputError(where, "expected at least 7 columns");
-    // Only collisions touch: the rows of held contacts changing mode (hold, stick, ...) do not.
-    if (fields[1] != "collision" && fields[1] != "microcollision") continue;
-    double v[4];
-    for (int k = 0; k < 4; ++k) {
+    if (fields.size() < numbers + 3) {
+      throw InputError(where, "expected at least " + std::to_string(numbers + 3) + " columns");
+    }
+    double v[10];
+    for (std::size_t k = 0; k < numbers; ++k) {
       const std::string& f = fields[k == 0 ? 0 : k + 3];
       auto result = std::from_chars(f.data(), f.data() + f.size(), v[k]);
       if (result.ec != std::errc() || result.ptr != f.data() + f.size() || !std::isfinite(v[k])) {
         throw InputError(where, "not a finite number: \"" + f + "\"");
       }
     }
+    const std::size_t a = trace.body_index(fields[2], where + " body_a");
+    const std::size_t b = trace.body_index(fields[3], where + " body_b");
+    // Only collisions touch: the rows of held contacts changing mode (hold, stick, ...) do not.
+    if (fields[1] != "collision" && fields[1] != "microcollision") {
+      if (!held.empty() && v[0] < held.back().t) throw InputError(where, "time runs backwards");
+      held.push_back(HeldEvent{v[0], fields[1], a, b});
+      continue;
+    }
     ContactEvent c;
     c.t = v[0];
-    c.body_a = trace.body_index(fields[2], where + " body_a");
-    c.body_b = trace.body_index(fields[3], where + " body_b");
+    c.body_a = a;
+    c.body_b = b;
     c.p_W = Vec3(v[1], v[2], v[3]);
+    if (impulses) {
+      c.n_W = Vec3(v[4], v[5], v[6]);
+      c.j_W = Vec3(v[7], v[8], v[9]);
+    }
+    c.micro = fields[1] == "microcollision";
     if (!contacts.empty() && c.t < contacts.back().t)
       throw InputError(where, "time runs backwards");
     contacts.push_back(c);
   }
   trace.contacts = std::move(contacts);
+  trace.held = std::move(held);
 }
 
 }  // namespace palpable

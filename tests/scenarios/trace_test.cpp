@@ -74,10 +74,19 @@ TEST_CASE("events CSV fills the trace's contacts, bad rows name file and line",
     out << "t,kind,body_a,body_b,px,py,pz,nx,ny,nz,jx,jy,jz,approach_speed,energy_change,"
            "centre_of_pressure\n"
         << "0.25,collision,block,ramp,0.5,-0.125,3e-5,0,0,1,0,0,1,0.1,-0.01,0\n"
-        << "0.5,microcollision,ramp,block,0.1,0.2,0.3,0,0,1,0,0,1,0.01,0,1\n";
+        << "0.5,microcollision,ramp,block,0.1,0.2,0.3,0,0,1,0,0,1,0.01,0,1\n"
+        << "0.75,hold,block,ramp,0.5,0,0.1,0,0,0,0,0,0,0,0,0\n";
   }
   palpable::read_events_csv(path, trace);
   REQUIRE(trace.contacts.size() == 2);
+  CHECK(trace.contacts[0].j_W == Vec3(0, 0, 1));
+  CHECK(trace.contacts[0].n_W == Vec3(0, 0, 1));
+  CHECK_FALSE(trace.contacts[0].micro);
+  CHECK(trace.contacts[1].micro);
+  REQUIRE(trace.held.size() == 1);  // a held contact's change of mode, not a contact
+  CHECK(trace.held[0].kind == "hold");
+  CHECK(trace.held[0].t == 0.75);
+  CHECK(trace.held[0].body_b == 1);
   CHECK(trace.contacts[0].t == 0.25);
   CHECK(trace.contacts[0].body_a == 0);
   CHECK(trace.contacts[0].body_b == 1);

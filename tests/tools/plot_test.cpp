@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <set>
 
 using palpable::BodyState;
 using palpable::Vec3;
@@ -49,17 +50,21 @@ TEST_CASE("plot: every kind writes a PNG", "[tools][plot]") {
   }
   const std::string trace = "plot_test_incline.csv";
   write_incline_trace(trace);
-  const std::string incline_params[] = {
-      "body=block",   "angle_deg=30",      "friction=0.3",
-      "gravity=9.81", "initial_speed=0.0", "down_slope=[0.8660254037844386,0,-0.5]",
-      "normal=[0.5,0,0.8660254037844386]"};
+  const std::string incline_params[] = {"body=block",
+                                        "angle_deg=30",
+                                        "friction=0.3",
+                                        "gravity=9.81",
+                                        "initial_speed=0.0",
+                                        "down_slope=[0.8660254037844386,0,-0.5]",
+                                        "normal=[0.5,0,0.8660254037844386]"};
   struct Case {
     PlotKind kind;
     std::string name;
   };
   for (const Case& c :
        {Case{PlotKind::kSeries, "series"}, Case{PlotKind::kTop, "top"},
-        Case{PlotKind::kIncline, "incline"}, Case{PlotKind::kTurntable, "turntable"}}) {
+        Case{PlotKind::kIncline, "incline"}, Case{PlotKind::kTurntable, "turntable"},
+        Case{PlotKind::kLine, "line"}, Case{PlotKind::kTumble, "tumble"}}) {
     CAPTURE(c.name);
     PlotOptions options;
     options.trace_path = trace;
@@ -102,4 +107,89 @@ TEST_CASE("plot: bad input and a failing gnuplot leave no file", "[tools][plot]"
   CHECK_THROWS_WITH(palpable::tools::plot_trace(options), Catch::Contains("gnuplot-nox"));
   CHECK_FALSE(std::filesystem::exists(options.out_path));
   std::remove(trace.c_str());
+}
+
+namespace {
+// Bodies on a line: a striker and two balls moving along x only.
+void write_line_trace(const std::string& path) {
+  std::ofstream out(path);
+  out << palpable::kTraceHeader << "\n";
+  for (int k = 0; k <= 50; ++k) {
+    BodyState table, a, b;
+    a.x_W = Vec3(0.02 * k, 0.0, 0.03);
+    b.x_W = Vec3(1.0 + 0.01 * k, 0.0, 0.03);
+    palpable::write_trace_rows(out, 0.02 * k, {"table", "a", "b"}, {table, a, b});
+  }
+}
+
+palpable::Scene scene_of(const std::string& json_text) {
+  return palpable::scene_from_json(nlohmann::json::parse(json_text), "test.json");
+}
+}  // namespace
+
+TEST_CASE("plot: line and tumble draw, auto chooses by scene and trace", "[tools][plot]") {
+  const std::string line = "plot_test_kinds_line.csv", incline = "plot_test_kinds_incline.csv";
+  write_line_trace(line);
+  write_incline_trace(incline);
+  for (PlotKind kind : {PlotKind::kLine, PlotKind::kTumble, PlotKind::kAuto}) {
+    PlotOptions options;
+    options.trace_path = line;
+    options.kind = kind;
+    options.out_path = "plot_test_kinds.png";
+    palpable::tools::plot_trace(options);
+    CHECK(is_png(options.out_path));
+    std::remove(options.out_path.c_str());
+  }
+  const palpable::Trace on_line = palpable::read_trace_csv(line);
+  const palpable::Trace sloped = palpable::read_trace_csv(incline);
+  CHECK(palpable::tools::choose_plot_kind(on_line, nullptr) == PlotKind::kLine);
+  CHECK(palpable::tools::choose_plot_kind(sloped, nullptr) == PlotKind::kTop);
+  const std::string bodies =
+      R"("bodies": [{"name": "table", "motion": "fixed", "shape": {"type": "halfspace", "normal": [0, 0, 1], "offset": 0}},
+                    {"name": "a", "mass": 1, "shape": {"type": "sphere", "radius": 0.03}},
+                    {"name": "b", "mass": 1, "shape": {"type": "sphere", "radius": 0.03}}])";
+  const palpable::Scene hinted = scene_of(
+      R"({"format": "palpable-scene/1", "end_time": 1, "plot": "tumble", )" + bodies + "}");
+  CHECK(palpable::tools::choose_plot_kind(on_line, &hinted) == PlotKind::kTumble);
+  const palpable::Scene plain =
+      scene_of(R"({"format": "palpable-scene/1", "end_time": 1, )" + bodies + "}");
+  CHECK(palpable::tools::choose_plot_kind(on_line, &plain) == PlotKind::kLine);
+  std::remove(line.c_str());
+  std::remove(incline.c_str());
+}
+
+TEST_CASE("plot: the palette does not repeat within a scene", "[tools][plot]") {
+  std::set<std::string> colours;
+  for (std::size_t i = 0; i < 24; ++i) {
+    const std::string c = palpable::tools::palette_colour(i);
+    CAPTURE(i, c);
+    CHECK(c.size() == 7);
+    CHECK(c[0] == '#');
+    colours.insert(c);
+  }
+  CHECK(colours.size() == 24);
+}
+
+TEST_CASE("plot: Pareto labels do not print over each other", "[tools][plot]") {
+  // Forty points in a tight cloud: most labels would overlap; the ones placed must not.
+  std::vector<palpable::tools::ParetoPoint> points;
+  for (int i = 0; i < 40; ++i) {
+    points.push_back({1e-3 * (1.0 + 0.01 * (i % 7)), 1e-4 * (1.0 + 0.013 * i), std::to_string(i)});
+  }
+  points.push_back({1e-1, 1e-8, "far"});
+  const auto places = palpable::tools::place_labels(points, -3.2, -0.8, -8.2, -3.6);
+  std::size_t shown = 0;
+  for (std::size_t i = 0; i < places.size(); ++i) {
+    if (!places[i].shown) continue;
+    ++shown;
+    for (std::size_t j = 0; j < i; ++j) {
+      if (!places[j].shown) continue;
+      const auto &a = places[i].box, &b = places[j].box;
+      CAPTURE(i, j);
+      CHECK_FALSE((a[0] < b[2] && b[0] < a[2] && a[1] < b[3] && b[1] < a[3]));
+    }
+  }
+  CHECK(places.back().shown);  // a point alone keeps its label
+  CHECK(shown > 3);
+  CHECK(shown < points.size());  // the cloud cannot label every point
 }

@@ -9,12 +9,12 @@
 
 #include <chrono>
 #include <cmath>
-#include <ctime>
-#include <iomanip>
 #include <initializer_list>
 #include <cstdint>
-#include <fstream>
 #include <cstdio>
+#include <ctime>
+#include <fstream>
+#include <iomanip>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -66,7 +66,10 @@ class RunObserver : public SimulationObserver {
     memory_->samples.push_back(states);
   }
   void on_collision(const CollisionRecord& r) override {
-    if (keep_) memory_->contacts.push_back(ContactEvent{r.t, r.a.index, r.b.index, r.p_W});
+    if (keep_) {
+      memory_->contacts.push_back(ContactEvent{r.t, r.a.index, r.b.index, r.p_W, r.n_W, r.impulse_W,
+                                               r.kind == CollisionKind::kMicrocollision});
+    }
     if (!events_ && !kept_events_) return;
     const EventRow row = event_row(r);
     if (events_) write_event_row(events_->stream(), row, names_);
