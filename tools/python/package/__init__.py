@@ -15,7 +15,17 @@ import tempfile
 import sys
 
 try:
-    import numpy as np
+    try:
+        import numpy as np
+    except ImportError:
+        # Another CPython of the same version than the Debian one the module was built with (a
+        # pyenv python3 first on PATH, say) has no numpy of its own: Debian's python3-numpy, built
+        # for the same ABI, is used from its dist-packages - appended, so the interpreter's own
+        # packages still come first. Any other interpreter fails below with a clear message.
+        _debian = "/usr/lib/python3/dist-packages"
+        if os.path.isdir(_debian) and _debian not in sys.path:
+            sys.path.append(_debian)
+        import numpy as np
     from ._palpable import InputError, Simulation as _Simulation, __version__, commit
     from . import _palpable
 except ImportError as e:  # another interpreter than the one the module was built for
