@@ -305,9 +305,10 @@ void check_ranges(const Reader& r, const json& doc, const Scene& scene) {
     if (b.is_dynamic()) {
       const char* key = body.contains("mass") ? "mass" : "density";
       if (!(b.mass.mass >= kMinMass && b.mass.mass <= kMaxMass)) {
-        r.fail_value(
-            path + "/" + key, at(key),
-            "a mass from 1e-20 to 1e20 kg (this makes " + std::to_string(b.mass.mass) + " kg)");
+        const std::string made = body.contains("mass")
+                                     ? ""
+                                     : " (this density makes " + json(b.mass.mass).dump() + " kg)";
+        r.fail_value(path + "/" + key, at(key), "a mass from 1e-20 to 1e20 kg" + made);
       }
     }
     if (!(b.state.x_W.norm() <= kMaxPosition)) {
