@@ -5,6 +5,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <ostream>
@@ -59,7 +60,16 @@ void write_trace_rows(std::ostream& out, double t, const std::vector<std::string
   }
 }
 
+namespace {
+// A directory opens as an empty stream: say what it is rather than that its header is wrong.
+void refuse_directory(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw InputError(path, "is a directory, not a file");
+}
+}  // namespace
+
 Trace read_trace_csv(const std::string& path) {
+  refuse_directory(path);
   std::ifstream in(path);
   if (!in) throw InputError(path, "cannot open trace file");
   std::string line;
@@ -127,6 +137,7 @@ Trace read_trace_csv(const std::string& path) {
 
 void read_events_csv(const std::string& path, Trace& trace) {
   static constexpr const char* kEventsHeader = "t,kind,body_a,body_b,px,py,pz";
+  refuse_directory(path);
   std::ifstream in(path);
   if (!in) throw InputError(path, "cannot open events file");
   std::string line;

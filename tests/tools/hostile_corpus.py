@@ -320,6 +320,9 @@ case("a trace with a bad header", ["compare", "t.csv"] + drop, 2, "t.csv:1",
      files={"t.csv": "time,body\n"})
 case("a trace that is empty", ["compare", "t.csv"] + drop, 2, "t.csv", files={"t.csv": ""})
 case("a trace that does not exist", ["compare", "none.csv"] + drop, 2, "none.csv")
+case("a directory as the trace", ["compare", "."] + drop, 2, ".: is a directory")
+case("a directory as the events", ["compare", "t.csv", "--events", "."] + drop, 2,
+     ".: is a directory", files={"t.csv": good_trace})
 case("a trace with too few columns", ["compare", "t.csv"] + drop, 2, "t.csv:2",
      files={"t.csv": HEADER + "0,ball,1,2\n"})
 case("compare --reference-from a directory", ["compare", "t.csv", "--reference-from", "."], 2, "is a directory",
