@@ -357,6 +357,12 @@ case("an impact spec on standard input, deep", ["impact", "-"], 2, "nested deepe
      stdin=deep.encode())
 case("an impact spec with an unknown key", ["impact", "i.json"], 2, "i.json:/Kk",
      files={"i.json": dict(ROD, Kk=1)})
+case("an impact spec with a NUL in a key (found by fuzz_impact)", ["impact", "i.json"], 2, "i.json:/K",
+     files={"i.json": json.dumps(ROD).replace('"friction"', '"K\\u0000x"')})
+case("a scene with a NUL in a key", ["run", "s.json"], 2, "s.json:/",
+     files={"s.json": json.dumps(scene())[:-1] + ', "a\\u0000b": 1}'})
+case("a body with a NUL in its name overlapping another", ["run", "s.json"], 2, "s.json:/bodies/2",
+     files={"s.json": json.dumps(with_body(2, position=[0, 0, 0.5], name="x\u0000y"))})
 
 # --- 11. The command line itself.
 case("no command", [], 2)

@@ -141,11 +141,14 @@ RunResult run_scene(const RunOptions& options) {
   // The simulation's own errors (bodies overlapping at the start, a clock that stopped) name a
   // JSON pointer or the bodies: the scene's file goes in front.
   auto in_scene = [&scene](const InputError& e) {
+    // The message is what() after "where: ", unless a "\u0000" in a name ended what() early.
     const std::string what = e.what();
-    if (e.where().empty()) return InputError(scene.source, what);
-    return InputError(scene.source + (e.where()[0] == '/' ? ":" : ": ") + e.where(),
-                      what.substr(e.where().size() + 2));
+    const std::size_t cut = e.where().empty() ? 0 : e.where().size() + 2;
+    const std::string message = what.size() >= cut ? what.substr(cut) : what;
+    if (e.where().empty()) return InputError(scene.source, message);
+    return InputError(scene.source + (e.where()[0] == '/' ? ":" : ": ") + e.where(), message);
   };
+
   std::optional<Simulation> simulation_slot;
   try {
     simulation_slot.emplace(scene.world,
