@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <map>
 #include <sstream>
 #include <utility>
@@ -272,6 +273,11 @@ Vec3 ConvexPolyhedron::support(const Vec3& direction_M) const {
   return vertices_[best];
 }
 
+namespace {
+constexpr double kPiShape = 3.14159265358979323846;
+constexpr std::int64_t kExhaustiveConvexity = std::int64_t{1} << 22;
+}  // namespace
+
 std::string polyhedron_defect(const ConvexPolyhedron& p, double tolerance_m) {
   const auto& hs = p.half_edges();
   const auto& vs = p.vertices();
@@ -310,6 +316,10 @@ std::string polyhedron_defect(const ConvexPolyhedron& p, double tolerance_m) {
     } while (h != h0);
     if (degree < 3) return fail("vertex of degree < 3", v);
   }
+  // Every vertex against every face plane is exact but costs faces x vertices (a hull of 10^6
+  // points: over 300 s); past a few million pairs the local checks below stand for it.
+  const bool exhaustive =
+      static_cast<std::int64_t>(num_f) * static_cast<std::int64_t>(num_v) <= kExhaustiveConvexity;
   std::vector<int> visits(num_h, 0);
   for (int f = 0; f < num_f; ++f) {
     const PolyFace& face = fs[f];
@@ -344,9 +354,55 @@ std::string polyhedron_defect(const ConvexPolyhedron& p, double tolerance_m) {
       const Vec3 inward = face.normal_M.cross(ac);
       if (inward.dot(b - a) > tolerance_m * ac.norm()) return fail("face not convex", f);
     }
+    if (exhaustive) {
+      for (int v = 0; v < num_v; ++v) {
+        if (face.normal_M.dot(vs[v]) - face.offset > tolerance_m) {
+          return fail("a vertex lies outside a face plane (not convex or normal not outward)", f);
+        }
+      }
+    } else {
+      // Convex at each edge: the next vertex of the face across it lies inside this face's plane
+      // (that face is planar and convex, so all of it does).
+      int e = face.half_edge;
+      do {
+        const int across = hs[hs[hs[e].twin].next].next;
+        if (face.normal_M.dot(vs[hs[across].tail]) - face.offset > tolerance_m) {
+          return fail("a vertex lies outside a face plane (not convex or normal not outward)", f);
+        }
+        e = hs[e].next;
+      } while (e != face.half_edge);
+    }
+  }
+  if (!exhaustive) {
+    // Convex at each vertex: its star winds once about the vertex. Seen along the mean of the
+    // normals of the faces around it, the edges leaving it turn through 2 pi in all, not 4 pi
+    // (convex edges and a star wound twice could still close up into a sphere's topology). With
+    // convex edges and vertices, a closed surface of a sphere's topology is convex (Alexandrov),
+    // so these O(E) checks stand for the one of every vertex against every face.
     for (int v = 0; v < num_v; ++v) {
-      if (face.normal_M.dot(vs[v]) - face.offset > tolerance_m) {
-        return fail("a vertex lies outside a face plane (not convex or normal not outward)", f);
+      const int h0 = p.vertex_half_edge()[v];
+      Vec3 axis = Vec3::Zero();
+      int h = h0;
+      do {
+        axis += fs[hs[h].face].normal_M;
+        h = hs[hs[h].prev].twin;
+      } while (h != h0);
+      if (!(axis.norm() > 1e-9)) return fail("vertex star wound more than once", v);
+      axis.normalize();
+      double turning = 0.0;
+      auto projected = [&](int edge) {
+        const Vec3 d = vs[hs[hs[edge].next].tail] - vs[v];
+        return Vec3(d - axis * axis.dot(d));
+      };
+      h = h0;
+      do {
+        const int g = hs[hs[h].prev].twin;
+        const Vec3 a = projected(h), b = projected(g);
+        turning += std::atan2(axis.dot(a.cross(b)), a.dot(b));
+        h = g;
+      } while (h != h0);
+      if (std::abs(std::abs(turning) - 2.0 * kPiShape) > 0.5 * kPiShape) {
+        return fail("vertex star wound more than once", v);
       }
     }
   }

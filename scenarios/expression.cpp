@@ -1,9 +1,12 @@
 #include "scenarios/expression.hpp"
+#include "scenarios/json_reader.hpp"
 
 #include "core/check.hpp"
 
 #include <cctype>
+#include <cerrno>
 #include <cmath>
+#include <cstdlib>
 #include <functional>
 
 namespace palpable {
@@ -12,6 +15,9 @@ namespace {
 using nlohmann::json;
 
 constexpr double kPi = 3.14159265358979323846;
+// Deepest nesting of parentheses, function calls, signs and powers in one expression: each level
+// is a few frames of the recursive descent, so "((((..." a million deep would overflow the stack.
+constexpr int kMaxExpressionDepth = 256;
 
 // Recursive descent over: expr = term (('+'|'-') term)*; term = power (('*'|'/') power)*;
 // power = unary ('^' power)?; unary = '-' unary | primary; primary = number | name | name '('
@@ -25,14 +31,18 @@ class Parser {
   double parse() {
     const double x = expr();
     skip();
-    if (pos_ != text_.size()) fail("unexpected \"" + text_.substr(pos_) + "\"");
+    if (pos_ != text_.size()) fail("unexpected \"" + shorten(text_.substr(pos_)) + "\"");
     if (!std::isfinite(x)) fail("the value is not finite");
     return x;
   }
 
  private:
   [[noreturn]] void fail(const std::string& what) const {
-    throw InputError(where_, "in \"=" + text_ + "\": " + what);
+    throw InputError(where_, "in \"=" + shorten(text_) + "\": " + what);
+  }
+  // Text for a message, cut at 60 characters (an expression may be megabytes long).
+  static std::string shorten(const std::string& text) {
+    return text.size() > 60 ? text.substr(0, 57) + "..." : text;
   }
   void skip() {
     while (pos_ < text_.size() && std::isspace(static_cast<unsigned char>(text_[pos_]))) ++pos_;
@@ -69,33 +79,53 @@ class Parser {
       }
     }
   }
+  // Counts the recursion levels of the descent while one is open.
+  struct Level {
+    explicit Level(Parser& p) : parser(p) {
+      if (++parser.depth_ > kMaxExpressionDepth) {
+        parser.fail("nested deeper than " + std::to_string(kMaxExpressionDepth) + " levels");
+      }
+    }
+    ~Level() { --parser.depth_; }
+    Parser& parser;
+  };
   double power() {
     const double base = unary();
-    if (eat('^')) return std::pow(base, power());
+    if (eat('^')) {
+      Level level(*this);
+      return std::pow(base, power());
+    }
     return base;
   }
   double unary() {
-    if (eat('-')) return -unary();
-    if (eat('+')) return unary();
+    if (eat('-')) {
+      Level level(*this);
+      return -unary();
+    }
+    if (eat('+')) {
+      Level level(*this);
+      return unary();
+    }
     return primary();
   }
   double primary() {
     skip();
     if (eat('(')) {
+      Level level(*this);
       const double x = expr();
       if (!eat(')')) fail("missing \")\"");
       return x;
     }
     if (pos_ < text_.size() &&
         (std::isdigit(static_cast<unsigned char>(text_[pos_])) || text_[pos_] == '.')) {
-      std::size_t used = 0;
-      double x = 0.0;
-      try {
-        x = std::stod(text_.substr(pos_), &used);
-      } catch (const std::exception&) {
-        fail("a malformed number");
-      }
-      pos_ += used;
+      // strtod reads the number in place (stod on the rest of the text copied it for every
+      // number: quadratic in a long expression); out of range is malformed, as stod had it.
+      const char* start = text_.c_str() + pos_;
+      char* end = nullptr;
+      errno = 0;
+      const double x = std::strtod(start, &end);
+      if (end == start || errno == ERANGE) fail("a malformed number");
+      pos_ += static_cast<std::size_t>(end - start);
       return x;
     }
     std::string name;
@@ -103,9 +133,11 @@ class Parser {
            (std::isalnum(static_cast<unsigned char>(text_[pos_])) || text_[pos_] == '_')) {
       name += text_[pos_++];
     }
-    if (name.empty()) fail(pos_ < text_.size() ? "unexpected \"" + text_.substr(pos_) + "\""
-                                               : "an expression ends too early");
+    if (name.empty())
+      fail(pos_ < text_.size() ? "unexpected \"" + shorten(text_.substr(pos_)) + "\""
+                               : "an expression ends too early");
     if (eat('(')) {
+      Level level(*this);
       std::vector<double> args{expr()};
       while (eat(',')) args.push_back(expr());
       if (!eat(')')) fail("missing \")\" after the arguments of " + name);
@@ -145,6 +177,7 @@ class Parser {
   const std::map<std::string, double>& names_;
   const std::string& where_;
   std::size_t pos_ = 0;
+  int depth_ = 0;
 };
 
 void expand(json& value, const std::map<std::string, double>& names, const std::string& pointer,
@@ -181,7 +214,7 @@ json expand_parameters(const json& document, const std::string& source) {
   if (auto p = out.find("parameters"); p != out.end()) {
     if (!p->is_object()) {
       throw InputError(source + ":/parameters",
-                       "got " + p->dump() + ", expected an object of named numbers");
+                       "got " + describe_json(*p) + ", expected an object of named numbers");
     }
     for (auto it = p->begin(); it != p->end(); ++it) {
       const std::string where = source + ":/parameters/" + it.key();
@@ -203,7 +236,8 @@ json expand_parameters(const json& document, const std::string& source) {
         names[it.key()] = evaluate_expression(it->get<std::string>().substr(1), names, where);
         *it = names[it.key()];
       } else {
-        throw InputError(where, "got " + it->dump() + ", expected a number or \"=expression\"");
+        throw InputError(where,
+                         "got " + describe_json(*it) + ", expected a number or \"=expression\"");
       }
     }
   }

@@ -4,6 +4,7 @@
 
 #include <cctype>
 #include <cmath>
+#include <cstdint>
 
 namespace palpable {
 
@@ -29,7 +30,46 @@ json parse_json_text(const std::string& text, const std::string& where) {
   }
 }
 
+bool is_valid_utf8(const std::string& text) {
+  const auto* p = reinterpret_cast<const unsigned char*>(text.data());
+  const auto* end = p + text.size();
+  while (p < end) {
+    const unsigned char c = *p;
+    int length = 0;
+    std::uint32_t code = 0;
+    if (c < 0x80) {
+      ++p;
+      continue;
+    } else if ((c & 0xE0) == 0xC0) {
+      length = 2;
+      code = c & 0x1F;
+    } else if ((c & 0xF0) == 0xE0) {
+      length = 3;
+      code = c & 0x0F;
+    } else if ((c & 0xF8) == 0xF0) {
+      length = 4;
+      code = c & 0x07;
+    } else {
+      return false;
+    }
+    if (end - p < length) return false;
+    for (int k = 1; k < length; ++k) {
+      if ((p[k] & 0xC0) != 0x80) return false;
+      code = (code << 6) | (p[k] & 0x3F);
+    }
+    // Overlong forms, UTF-16 surrogates and code points past U+10FFFF are not UTF-8.
+    static constexpr std::uint32_t kSmallest[] = {0, 0, 0x80, 0x800, 0x10000};
+    if (code < kSmallest[length] || (code >= 0xD800 && code <= 0xDFFF) || code > 0x10FFFF) {
+      return false;
+    }
+    p += length;
+  }
+  return true;
+}
+
 json parse_command_line_value(const std::string& text, const std::string& where) {
+  // A bare word becomes a JSON string, which must be UTF-8 (JSON text is checked by the parser).
+  if (!is_valid_utf8(text)) throw InputError(where, "not valid UTF-8 text");
   const bool word_like = !text.empty() && (std::isalpha(static_cast<unsigned char>(text[0])) ||
                                            text[0] == '_' || text[0] == '=');
   if (word_like && !json::accept(text)) return text;
@@ -37,7 +77,9 @@ json parse_command_line_value(const std::string& text, const std::string& where)
 }
 
 std::string describe_json(const json& value) {
-  std::string text = value.dump();
+  // Invalid UTF-8 (which no parsed document holds, but a value built in code may) is shown as
+  // U+FFFD rather than thrown while an error is being reported.
+  std::string text = value.dump(-1, ' ', false, json::error_handler_t::replace);
   if (text.size() > 60) text = text.substr(0, 57) + "...";
   return text;
 }

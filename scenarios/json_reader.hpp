@@ -59,6 +59,9 @@ inline constexpr std::size_t kMaxJsonBytes = std::size_t{1} << 30;  // 1 GiB
 // `where` (a file, or an option).
 nlohmann::json parse_json_text(const std::string& text, const std::string& where);
 
+// True if `text` is well-formed UTF-8 (no overlong forms, surrogates or code points past U+10FFFF).
+bool is_valid_utf8(const std::string& text);
+
 // A value given on the command line (--set, --param, --vary): JSON, or a bare word — text that is
 // not JSON and starts with a letter, '_' or '=' (an expression) — taken as a string. JSON that is
 // out of range (1e999) or too deep is an InputError naming `where`, not a word.

@@ -692,6 +692,39 @@ void validate_reference(const json& spec, const std::string& where,
       }
     }
   }
+  // The ranges the comparisons need, checked here too, so that a scene's reference that could
+  // only fail does so before its run rather than after it.
+  auto check = [&](const char* key, bool (*ok)(double), const char* expected) {
+    auto value = spec.find(key);
+    if (value != spec.end() && !ok(value->get<double>())) {
+      r.fail_value(std::string("/") + key, *value, expected);
+    }
+  };
+  auto positive = [](double x) { return x > 0.0; };
+  auto non_negative = [](double x) { return x >= 0.0; };
+  auto below_one = [](double e) { return e >= 0.0 && e < 1.0; };
+  auto up_to_one = [](double e) { return e >= 0.0 && e <= 1.0; };
+  auto non_zero = [](double x) { return x != 0.0; };
+  if (type == "slide_to_roll") {
+    check("friction", positive, "friction > 0");
+    check("gravity", positive, "gravity > 0 (its magnitude)");
+    check("radius", positive, "radius > 0");
+    check("k", positive, "k > 0 (I = k m R^2)");
+  } else if (type == "bouncing_ball") {
+    check("restitution", below_one, "0 <= e < 1");
+    check("gravity", positive, "gravity > 0 (its magnitude)");
+    check("radius", non_negative, "radius >= 0");
+  } else if (type == "impact_1d") {
+    check("restitution", up_to_one, "0 <= e <= 1");
+    check("mass_a", positive, "mass_a > 0");
+    check("mass_b", positive, "mass_b > 0");
+    if (spec.contains("body_a") && spec.contains("body_b") && spec["body_a"] == spec["body_b"]) {
+      r.fail_value("/body_b", spec["body_b"], "a body other than body_a");
+    }
+  } else if (type == "turntable") {
+    check("k", positive, "k > 0 (I = k m r^2)");
+    check("omega", non_zero, "a non-zero rate");
+  }
 }
 
 namespace {

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <climits>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <set>
@@ -29,6 +30,12 @@ constexpr double kMinSize = 1e-6;
 constexpr double kMaxSize = 1e6;
 constexpr double kMinAspect = 1e-6;  // thinnest over thickest dimension of a box
 constexpr const char* kSizeRange = "a size from 1e-6 to 1e6 m";
+// A body's mass [kg], distance from the origin [m], speed [m/s] and angular speed [rad/s].
+constexpr double kMinMass = 1e-20;
+constexpr double kMaxMass = 1e20;
+constexpr double kMaxPosition = 1e9;
+constexpr double kMaxSpeed = 1e6;
+constexpr double kMaxAngularSpeed = 1e9;
 
 std::shared_ptr<const Shape> parse_shape(const Reader& r, const json& value,
                                          const std::string& path, bool allow_unbounded) {
@@ -287,6 +294,46 @@ void check_ranges(const Reader& r, const json& doc, const Scene& scene) {
     if (std::isfinite(radius)) extent = std::max(extent, b.state.x_W.norm() + radius);
     if (b.is_dynamic() && radius > 0.0) smallest = std::min(smallest, radius);
   }
+  // Each body's numbers within what the doubles carry through a collision (a mass of 1e-300
+  // makes an inertia that underflows; a speed of 1e300 an energy that overflows) and what the
+  // clock can resolve (positions).
+  const json& bodies = doc["bodies"];
+  for (std::size_t i = 0; i < scene.world.bodies.size(); ++i) {
+    const Body& b = scene.world.bodies[i];
+    const std::string path = "/bodies/" + std::to_string(i);
+    const json& body = bodies[i];
+    auto at = [&](const char* key) { return body.contains(key) ? body[key] : json(); };
+    if (b.is_dynamic()) {
+      const char* key = body.contains("mass") ? "mass" : "density";
+      if (!(b.mass.mass >= kMinMass && b.mass.mass <= kMaxMass)) {
+        const std::string made = body.contains("mass")
+                                     ? ""
+                                     : " (this density makes " + json(b.mass.mass).dump() + " kg)";
+        r.fail_value(path + "/" + key, at(key), "a mass from 1e-20 to 1e20 kg" + made);
+      }
+    }
+    if (!(b.state.x_W.norm() <= kMaxPosition)) {
+      r.fail_value(path + "/position", at("position"), "a position within 1e9 m of the origin");
+    }
+    const bool kinematic = b.motion == MotionKind::kKinematic;
+    const Vec3 v = kinematic ? b.kinematic.velocity_W : b.state.v_W;
+    const Vec3 w = kinematic ? b.kinematic.angular_velocity_W : b.state.w_W;
+    const std::string motion = kinematic ? path + "/motion/kinematic" : path;
+    const json& motion_json = kinematic ? body["motion"]["kinematic"] : body;
+    auto motion_at = [&](const char* key) {
+      return motion_json.contains(key) ? motion_json[key] : json();
+    };
+    if (!(v.norm() <= kMaxSpeed)) {
+      r.fail_value(motion + "/velocity", motion_at("velocity"), "a speed of at most 1e6 m/s");
+    }
+    if (!(w.norm() <= kMaxAngularSpeed)) {
+      r.fail_value(motion + "/angular_velocity", motion_at("angular_velocity"),
+                   "an angular speed of at most 1e9 rad/s");
+    }
+    if (kinematic && !(b.kinematic.point_W.norm() <= kMaxPosition)) {
+      r.fail_value(motion + "/point", motion_at("point"), "a point within 1e9 m of the origin");
+    }
+  }
   const json& settings = doc.contains("settings") ? doc["settings"] : json::object();
   auto value = [&](const char* key) { return settings.contains(key) ? settings[key] : json(); };
   // The envelope detects contact: larger than half the smallest dynamic body, a microcollision
@@ -313,11 +360,11 @@ void check_ranges(const Reader& r, const json& doc, const Scene& scene) {
   if (g > 1e6) {
     r.fail_value("/gravity", doc.value("gravity", json()), "a magnitude of at most 1e6 m/s^2");
   }
-  if (scene.end_time > 1e9) {
+  if (scene.end_time > kMaxEndTime) {
     r.fail_value("/end_time", doc["end_time"],
                  "at most 1e9 s (the event clock resolves 1e-12 of the time)");
   }
-  if (scene.output_interval > 0.0 && scene.end_time / scene.output_interval > 1e9) {
+  if (scene.output_interval > 0.0 && scene.end_time / scene.output_interval > kMaxSamples) {
     r.fail_value("/output/interval", doc["output"]["interval"],
                  "at least end_time / 1e9 (" + std::to_string(scene.end_time / 1e9) +
                      " s): more than 1e9 samples");
@@ -428,6 +475,9 @@ std::string read_text_file(const std::string& path) {
   if (path == "-") {
     text << std::cin.rdbuf();
   } else {
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec))
+      throw InputError(path, "is a directory, not a file");
     std::ifstream in(path, std::ios::binary);
     if (!in) throw InputError(path, "cannot open file");
     text << in.rdbuf();

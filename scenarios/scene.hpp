@@ -11,6 +11,11 @@
 
 namespace palpable {
 
+// The longest run a scene may ask for [s] (the event clock resolves 1e-12 of the time), and the
+// most samples it may write.
+inline constexpr double kMaxEndTime = 1e9;
+inline constexpr double kMaxSamples = 1e9;
+
 struct Scene {
   std::string name;
   std::string source;            // file name (or "-") the scene came from, for messages

@@ -1,9 +1,11 @@
 #include "scenarios/trace.hpp"
 
 #include "core/check.hpp"
+#include "scenarios/json_reader.hpp"
 
 #include <charconv>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <ostream>
@@ -28,6 +30,12 @@ std::vector<BodyState> Trace::series(std::size_t body) const {
 }
 
 namespace {
+// A CSV field for an error message: at most 40 bytes, and valid UTF-8 or replaced by "?".
+std::string describe_field(const std::string& field) {
+  std::string text = field.size() > 40 ? field.substr(0, 37) + "..." : field;
+  return is_valid_utf8(text) ? text : "?";
+}
+
 void put(std::ostream& out, double x) {
   char buffer[32];
   auto result = std::to_chars(buffer, buffer + sizeof buffer, x, std::chars_format::general, 17);
@@ -53,7 +61,16 @@ void write_trace_rows(std::ostream& out, double t, const std::vector<std::string
   }
 }
 
+namespace {
+// A directory opens as an empty stream: say what it is rather than that its header is wrong.
+void refuse_directory(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw InputError(path, "is a directory, not a file");
+}
+}  // namespace
+
 Trace read_trace_csv(const std::string& path) {
+  refuse_directory(path);
   std::ifstream in(path);
   if (!in) throw InputError(path, "cannot open trace file");
   std::string line;
@@ -79,11 +96,17 @@ Trace read_trace_csv(const std::string& path) {
     for (int k = 0; k < 14; ++k) {
       const std::string& f = fields[k == 0 ? 0 : k + 1];
       auto result = std::from_chars(f.data(), f.data() + f.size(), v[k]);
-      if (result.ec != std::errc() || result.ptr != f.data() + f.size()) {
-        throw InputError(path + ":" + std::to_string(line_number), "not a number: \"" + f + "\"");
+      // from_chars reads "nan" and "inf": a trace holds finite numbers only.
+      if (result.ec != std::errc() || result.ptr != f.data() + f.size() || !std::isfinite(v[k])) {
+        throw InputError(path + ":" + std::to_string(line_number),
+                         "not a finite number: \"" + describe_field(f) + "\"");
       }
     }
     const std::string& name = fields[1];
+    if (name.empty() || !is_valid_utf8(name)) {
+      throw InputError(path + ":" + std::to_string(line_number),
+                       "a body name is non-empty UTF-8 text");
+    }
     if (trace.times.empty() || v[0] != current_t) {
       if (!trace.times.empty() && !(v[0] > current_t)) {
         throw InputError(path + ":" + std::to_string(line_number), "time runs backwards");
@@ -123,6 +146,7 @@ Trace read_trace_csv(const std::string& path) {
 void read_events_csv(const std::string& path, Trace& trace) {
   static constexpr const char* kEventsHeader = "t,kind,body_a,body_b,px,py,pz";
   static constexpr const char* kImpulseHeader = "t,kind,body_a,body_b,px,py,pz,nx,ny,nz,jx,jy,jz";
+  refuse_directory(path);
   std::ifstream in(path);
   if (!in) throw InputError(path, "cannot open events file");
   std::string line;
@@ -151,7 +175,7 @@ void read_events_csv(const std::string& path, Trace& trace) {
       const std::string& f = fields[k == 0 ? 0 : k + 3];
       auto result = std::from_chars(f.data(), f.data() + f.size(), v[k]);
       if (result.ec != std::errc() || result.ptr != f.data() + f.size() || !std::isfinite(v[k])) {
-        throw InputError(where, "not a finite number: \"" + f + "\"");
+        throw InputError(where, "not a finite number: \"" + describe_field(f) + "\"");
       }
     }
     const std::size_t a = trace.body_index(fields[2], where + " body_a");

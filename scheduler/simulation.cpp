@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <map>
+#include <sstream>
 
 namespace palpable {
 
@@ -291,6 +292,26 @@ void Simulation::Impl::start() {
   schedule_sample();
 }
 
+void Simulation::Impl::report_stall(const Event& e) const {
+  std::string what;
+  if (e.b.valid()) {
+    what = "bodies \"" + world.bodies[e.a.index].name + "\" and \"" + world.bodies[e.b.index].name +
+           "\"";
+  } else if (e.a.valid()) {
+    what = "body \"" + world.bodies[e.a.index].name + "\"";
+  } else {
+    what = "the run";
+  }
+  std::ostringstream t;
+  t.precision(17);
+  t << e.t;
+  throw InputError("t = " + t.str() + " s",
+                   "the clock stopped advancing: " + std::to_string(stall_events) +
+                       " events within " + std::to_string(kStallResolution) +
+                       " of the time, the last for " + what +
+                       " (a Zeno sequence, or a time step that rounds away)");
+}
+
 StepResult Simulation::Impl::step(double t_end, SimulationObserver* step_observer) {
   observer = step_observer;
   StepResult result;
@@ -303,6 +324,12 @@ StepResult Simulation::Impl::step(double t_end, SimulationObserver* step_observe
   PALPABLE_CHECK(e.t >= now, "time ran backwards in the event queue");
   now = e.t;
   ++stats.events;
+  if (e.t > stall_until) {
+    stall_until = e.t + kStallResolution * std::max(1.0, std::abs(e.t));
+    stall_events = 0;
+  } else if (++stall_events > kStallEvents + kStallEventsPerBody * world.bodies.size()) {
+    report_stall(e);
+  }
   result.t = e.t;
   result.kind = e.kind;
   result.a = e.a;

@@ -24,6 +24,11 @@ struct Simulation::Impl {
   SimulationOptions options;
   SimulationStats stats;
   double now = 0.0;
+  // The progress guard: events processed since the clock last moved past `stall_until` (a window
+  // of kStallResolution of the time). Too many means the run can no longer advance (Zeno, or a
+  // clock whose increments round away): it stops with an error naming the pair and the time.
+  double stall_until = -1.0;
+  std::uint64_t stall_events = 0;
   EventQueue queue;
   PairSet pairs;
   std::uint64_t next_sample = 0;
@@ -212,6 +217,14 @@ struct Simulation::Impl {
   void start();
 
   StepResult step(double t_end, SimulationObserver* step_observer);
+  // Throws InputError "t = <time> s": the clock stopped advancing, naming the last event's bodies.
+  [[noreturn]] void report_stall(const Event& e) const;
+
+  // The progress guard's window, relative to the time (1e-12 is some 4,500 ulps of the clock),
+  // and how many events it may hold: a valid run moves past it long before.
+  static constexpr double kStallResolution = 1e-12;
+  static constexpr std::uint64_t kStallEvents = 1000000;
+  static constexpr std::uint64_t kStallEventsPerBody = 1000;
 };
 
 }  // namespace palpable

@@ -76,7 +76,9 @@ palpable::tools::CommandRegistration registration{
                     << ": the trace may be wrong\n";
         }
         if (summary_file) {
-          summary_file->stream() << palpable::tools::summary_json(result).dump(2) << "\n";
+          summary_file->stream() << palpable::tools::summary_json(result).dump(
+                                        2, ' ', false, nlohmann::json::error_handler_t::replace)
+                                 << "\n";
           summary_file->commit();
         }
         return palpable::tools::kExitOk;

@@ -262,3 +262,62 @@ TEST_CASE("Fuzz: varied clouds, scales and positions give valid recentred hulls"
   CAPTURE(rejected);
   CHECK(rejected < 50);
 }
+
+namespace {
+// A triangulated sphere (rings x segments), each triangle counter-clockwise about its outward
+// normal; `dent` moves one vertex of the middle ring to that fraction of the radius.
+ConvexPolyhedron uv_sphere(int rings, int segments, double dent) {
+  const double pi = 3.14159265358979323846;
+  std::vector<Vec3> v{Vec3(0, 0, 1)};
+  for (int k = 1; k < rings; ++k) {
+    for (int j = 0; j < segments; ++j) {
+      const double theta = pi * k / rings, phi = 2 * pi * j / segments;
+      v.emplace_back(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi),
+                     std::cos(theta));
+    }
+  }
+  v.emplace_back(0, 0, -1);
+  const int south = static_cast<int>(v.size()) - 1;
+  auto ring = [&](int k, int j) { return 1 + (k - 1) * segments + (j % segments); };
+  std::vector<std::vector<int>> faces;
+  auto add = [&](int a, int b, int c) {
+    const Vec3 n = (v[b] - v[a]).cross(v[c] - v[a]);
+    if (n.dot(v[a] + v[b] + v[c]) > 0) {
+      faces.push_back({a, b, c});
+    } else {
+      faces.push_back({a, c, b});
+    }
+  };
+  for (int j = 0; j < segments; ++j) {
+    add(0, ring(1, j), ring(1, j + 1));
+    add(south, ring(rings - 1, j), ring(rings - 1, j + 1));
+    for (int k = 1; k + 1 < rings; ++k) {
+      add(ring(k, j), ring(k + 1, j), ring(k + 1, j + 1));
+      add(ring(k, j), ring(k + 1, j + 1), ring(k, j + 1));
+    }
+  }
+  v[ring(rings / 2, 0)] *= dent;
+  return ConvexPolyhedron::from_faces(v, faces, 1e-9);
+}
+}  // namespace
+
+TEST_CASE("a large mesh is validated by local checks: convex passes, a dent is refused",
+          "[core][hull][hostile]") {
+  // 7,082 vertices x 14,160 faces: past the exhaustive check's budget.
+  const ConvexPolyhedron p = uv_sphere(60, 120, 1.0);
+  CHECK(p.vertices().size() == 7082);
+  CHECK(polyhedron_defect(p, 1e-9) == "");
+  CHECK_THROWS_WITH(uv_sphere(60, 120, 0.99), Catch::Contains("outside a face plane"));
+  // The same on a small mesh, through the exhaustive check.
+  CHECK_NOTHROW(uv_sphere(6, 8, 1.0));
+  CHECK_THROWS_WITH(uv_sphere(6, 8, 0.9), Catch::Contains("outside a face plane"));
+}
+
+TEST_CASE("the hull of 200,000 points is built and validated in seconds", "[core][hull][hostile]") {
+  std::mt19937_64 rng(20);
+  std::normal_distribution<double> n(0.0, 1.0);
+  std::vector<Vec3> points;
+  for (int i = 0; i < 200000; ++i) points.push_back(Vec3(n(rng), n(rng), n(rng)).normalized());
+  const ConvexPolyhedron p = ConvexPolyhedron::from_points(points);
+  CHECK(p.vertices().size() > 100000);
+}

@@ -61,3 +61,34 @@ TEST_CASE("a scene's parameters move every value that depends on them", "[scenar
   bad["parameters"]["pi"] = 3;
   CHECK_THROWS_AS(palpable::scene_from_json(bad, "ramp.json"), InputError);
 }
+
+TEST_CASE("an expression nested too deep is bad input, not a stack overflow",
+          "[scenarios][parameters][hostile]") {
+  const std::map<std::string, double> names;
+  const int n = 100000;
+  const std::string parens = std::string(n, '(') + "1" + std::string(n, ')');
+  const std::string signs = std::string(n, '-') + "1";
+  std::string powers;
+  for (int i = 0; i < n; ++i) powers += "1^";
+  powers += "1";
+  std::string calls;
+  for (int i = 0; i < n; ++i) calls += "abs(";
+  calls += "1" + std::string(n, ')');
+  for (const std::string& text : {parens, signs, powers, calls}) {
+    CHECK_THROWS_WITH(
+        evaluate_expression(text, names, "s.json:/end_time"),
+        Catch::Contains("s.json:/end_time") && Catch::Contains("nested deeper than 256 levels"));
+  }
+  // 256 levels still evaluate; the message quotes at most 60 characters of the text.
+  CHECK(evaluate_expression(std::string(256, '(') + "2" + std::string(256, ')'), names, "x") ==
+        2.0);
+  try {
+    evaluate_expression(parens, names, "x");
+  } catch (const InputError& e) {
+    CHECK(std::string(e.what()).size() < 200);
+  }
+  // A long flat expression (1+1+...+1, 2 MB) is read in linear time.
+  std::string sum = "1";
+  for (int i = 0; i < 1000000; ++i) sum += "+1";
+  CHECK(evaluate_expression(sum, names, "x") == 1000001.0);
+}

@@ -15,9 +15,10 @@
 
 using namespace palpable;
 
-TEST_CASE("inputs outside what can be simulated are rejected naming the JSON path",
-          "[extremes][input]") {
-  const nlohmann::json base = nlohmann::json::parse(R"({
+namespace {
+// A ball at height z over a ground.
+nlohmann::json ball_over_ground(double z) {
+  nlohmann::json doc = nlohmann::json::parse(R"({
     "format": "palpable-scene/1", "end_time": 1.0,
     "settings": { "envelope": 1e-4 },
     "materials": { "default": { "friction": 0.5, "restitution": 0.5 } },
@@ -26,6 +27,14 @@ TEST_CASE("inputs outside what can be simulated are rejected naming the JSON pat
         "shape": { "type": "halfspace", "normal": [0, 0, 1], "offset": 0 } },
       { "name": "ball", "mass": 1.0, "shape": { "type": "sphere", "radius": 0.1 },
         "position": [0, 0, 0.5], "velocity": [0, 0, 0] } ] })");
+  doc["bodies"][1]["position"][2] = z;
+  return doc;
+}
+}  // namespace
+
+TEST_CASE("inputs outside what can be simulated are rejected naming the JSON path",
+          "[extremes][input]") {
+  const nlohmann::json base = ball_over_ground(0.5);
   REQUIRE_NOTHROW(scene_from_json(base, "x.json"));
   struct Bad {
     std::string pointer;
@@ -65,4 +74,17 @@ TEST_CASE("inputs outside what can be simulated are rejected naming the JSON pat
   world.add(test::sphere_body("ball", 0.1, 1.0, Vec3(0, 0, 0.5),
                               Vec3(std::numeric_limits<double>::infinity(), 0, 0)));
   CHECK_THROWS_WITH(Simulation(world, SimulationOptions{}), Catch::Contains("/bodies/1"));
+}
+
+TEST_CASE("a run whose clock stops advancing ends with an error naming the bodies and the time",
+          "[extremes][input][hostile]") {
+  // Gravity of 1e300 (the loader refuses it; a program building a World need not): the ball's
+  // microcollisions come at t ~ 1e-146 and the clock no longer moves. The progress guard stops the
+  // run instead of letting it go on until killed.
+  Scene scene = scene_from_json(ball_over_ground(0.1), "x.json");
+  scene.world.gravity_W = Vec3(0, 0, -1e300);
+  Simulation simulation(scene.world, SimulationOptions{});
+  CHECK_THROWS_WITH(simulation.run_until(1.0, nullptr),
+                    Catch::StartsWith("t = ") && Catch::Contains("clock stopped advancing") &&
+                        Catch::Contains("\"ground\" and \"ball\""));
 }

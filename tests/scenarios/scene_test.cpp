@@ -177,3 +177,29 @@ TEST_CASE("hostile JSON: too deep, out of range, on the command line too", "[sce
   CHECK(doc["end_time"] == "=2*0.5");
   CHECK(palpable::scene_from_json(doc, "s.json").end_time == 1.0);
 }
+
+TEST_CASE("hostile text: non-UTF-8 values, JSON not UTF-8, deep expressions",
+          "[scenarios][scene]") {
+  json doc = load_corpus()["base"];
+  // A bare word that is not UTF-8 would become a JSON string no writer can print.
+  CHECK_THROWS_WITH(
+      palpable::apply_override(doc, "/settings/restitution_law=po\xffsson"),
+      Catch::Contains("--set /settings/restitution_law=") && Catch::Contains("not valid UTF-8"));
+  CHECK_THROWS_WITH(palpable::apply_override(doc, "/name=\xc0\xaf"),  // overlong "/"
+                    Catch::Contains("not valid UTF-8"));
+  CHECK_THROWS_WITH(palpable::apply_override(doc, "/name=\xed\xa0\x80"),  // a surrogate
+                    Catch::Contains("not valid UTF-8"));
+  palpable::apply_override(doc, "/name=caf\xc3\xa9");  // UTF-8 is fine
+  CHECK(doc["name"] == "caf\xc3\xa9");
+  CHECK(palpable::is_valid_utf8("\xf0\x9f\x8e\xb3"));
+  CHECK_FALSE(palpable::is_valid_utf8("\xf4\x90\x80\x80"));  // past U+10FFFF
+  CHECK_FALSE(palpable::is_valid_utf8("\xe2\x82"));          // cut short
+  // In a file, the parser refuses it, naming the file.
+  CHECK_THROWS_WITH(palpable::parse_json_text("{\"name\": \"\xff\"}", "latin1.json"),
+                    Catch::StartsWith("latin1.json"));
+  // An =expression nested 100,000 deep in a scene: the file and pointer, not a stack overflow.
+  doc = load_corpus()["base"];
+  doc["end_time"] = "=" + std::string(100000, '(') + "1" + std::string(100000, ')');
+  CHECK_THROWS_WITH(palpable::scene_from_json(doc, "s.json"),
+                    Catch::StartsWith("s.json:/end_time") && Catch::Contains("nested deeper"));
+}

@@ -110,3 +110,22 @@ TEST_CASE("events CSV fills the trace's contacts, bad rows name file and line",
   CHECK_THROWS_WITH(palpable::read_events_csv(path, trace), Catch::StartsWith(path + ":1"));
   std::remove(path.c_str());
 }
+
+TEST_CASE("a trace holds finite numbers and UTF-8 body names only", "[scenarios][trace][hostile]") {
+  const std::string path = "trace_test_hostile.csv";
+  const char* rows[] = {
+      "0,a,nan,2,3,1,0,0,0,0,0,0,0,0,0\n",       // nan position
+      "0,a,1,2,3,1,0,0,0,inf,0,0,0,0,0\n",       // infinite velocity
+      "-nan,a,1,2,3,1,0,0,0,0,0,0,0,0,0\n",      // nan time
+      "0,\xff\xfe,1,2,3,1,0,0,0,0,0,0,0,0,0\n",  // a name that is not UTF-8
+  };
+  for (const char* row : rows) {
+    CAPTURE(row);
+    {
+      std::ofstream out(path);
+      out << palpable::kTraceHeader << "\n" << row;
+    }
+    CHECK_THROWS_WITH(palpable::read_trace_csv(path), Catch::StartsWith(path + ":2"));
+  }
+  std::remove(path.c_str());
+}

@@ -225,3 +225,16 @@ TEST_CASE("bad impact specs name the JSON path, the value and what was expected"
 
 }  // namespace
 }  // namespace palpable::tools
+
+TEST_CASE("an impact spec with a NUL in a key is bad input naming the file",
+          "[tools][impact][hostile]") {
+  // Found by fuzz_impact: the error re-thrown with the file name cut what() after the pointer,
+  // and a key holding \u0000 ends what()'s C string early (std::out_of_range, exit 1).
+  const std::string text = R"({"K\u0000": 1, "u0": [0.5, 0, -1]})";
+  CHECK_THROWS_AS(palpable::tools::parse_impact_spec_text(text, "i.json"), palpable::InputError);
+  try {
+    palpable::tools::parse_impact_spec_text(text, "i.json");
+  } catch (const palpable::InputError& e) {
+    CHECK(e.where().rfind("i.json:/K", 0) == 0);
+  }
+}

@@ -3,6 +3,7 @@
 #include "core/check.hpp"
 
 #include <atomic>
+#include <cerrno>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
@@ -71,18 +72,25 @@ AtomicFile::AtomicFile(std::string path) : path_(std::move(path)), final_path_(p
     // Follow the link: the data goes to its target, the link stays.
     std::error_code ec;
     const std::filesystem::path resolved = std::filesystem::weakly_canonical(path_, ec);
-    if (ec) throw std::runtime_error(path_ + ": cannot resolve the symbolic link");
+    if (ec) throw InputError(path_, "cannot resolve the symbolic link");
     final_path_ = resolved.string();
+  }
+  // An output that cannot be opened is a bad argument, found before anything runs (exit 2).
+  auto cannot_open = [this](int error) {
+    return InputError(path_, std::string("cannot open for writing: ") + std::strerror(error));
+  };
+  if (::stat(final_path_.c_str(), &st) == 0 && S_ISDIR(st.st_mode)) {
+    throw InputError(path_, "is a directory, not a file to write");
   }
   if (::stat(final_path_.c_str(), &st) == 0 && is_special(st)) {
     out_.open(final_path_, std::ios::out);  // straight through, no truncation games
-    if (!out_) throw std::runtime_error(path_ + ": cannot open for writing");
+    if (!out_) throw cannot_open(errno);
     out_.precision(17);
     return;
   }
   temp_path_ = final_path_ + ".tmp-" + std::to_string(::getpid());
   out_.open(temp_path_, std::ios::out | std::ios::trunc);
-  if (!out_) throw std::runtime_error(path_ + ": cannot open for writing");
+  if (!out_) throw cannot_open(errno);
   slot_ = register_temp(temp_path_);
   out_.precision(17);
 }

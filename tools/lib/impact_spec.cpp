@@ -225,8 +225,10 @@ ImpactSpec parse_impact_spec_text(const std::string& text, const std::string& so
     return parse_impact_spec(spec);
   } catch (const InputError& e) {
     // Name the file as well as the JSON path, as scene errors do.
-    throw InputError(source + ":" + e.where(),
-                     std::string(e.what()).substr(e.where().empty() ? 0 : e.where().size() + 2));
+    // The message is what() after "where: ", unless a "\u0000" in a key ended what() early.
+    const std::string what = e.what();
+    const std::size_t cut = e.where().empty() ? 0 : e.where().size() + 2;
+    throw InputError(source + ":" + e.where(), what.size() >= cut ? what.substr(cut) : what);
   }
 }
 

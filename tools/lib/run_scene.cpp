@@ -17,6 +17,7 @@
 #include <iomanip>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -215,13 +216,39 @@ RunResult run_scene(const RunOptions& options) {
     if (!(*options.end_time > 0.0) || !std::isfinite(*options.end_time)) {
       throw InputError("--end", "expected a positive number of seconds");
     }
+    // The scene's own end_time is held to this in the loader; --end replaces it after.
+    if (*options.end_time > kMaxEndTime) {
+      throw InputError("--end", "at most 1e9 s (the event clock resolves 1e-12 of the time)");
+    }
+    if (result.scene.output_interval > 0.0 &&
+        *options.end_time / result.scene.output_interval > kMaxSamples) {
+      throw InputError("--end", "more than 1e9 samples at the scene's output interval");
+    }
     result.scene.end_time = *options.end_time;
   }
   const Scene& scene = result.scene;
 
   SimulationOptions sim_options;
   sim_options.output_interval = scene.output_interval;
-  Simulation simulation(scene.world, sim_options);  // validates (overlaps) before any file opens
+  // The simulation's own errors (bodies overlapping at the start, a clock that stopped) name a
+  // JSON pointer or the bodies: the scene's file goes in front.
+  auto in_scene = [&scene](const InputError& e) {
+    // The message is what() after "where: ", unless a "\u0000" in a name ended what() early.
+    const std::string what = e.what();
+    const std::size_t cut = e.where().empty() ? 0 : e.where().size() + 2;
+    const std::string message = what.size() >= cut ? what.substr(cut) : what;
+    if (e.where().empty()) return InputError(scene.source, message);
+    return InputError(scene.source + (e.where()[0] == '/' ? ":" : ": ") + e.where(), message);
+  };
+
+  std::optional<Simulation> simulation_slot;
+  try {
+    simulation_slot.emplace(scene.world,
+                            sim_options);  // validates (overlaps) before any file opens
+  } catch (const InputError& e) {
+    throw in_scene(e);
+  }
+  Simulation& simulation = *simulation_slot;
 
   std::unique_ptr<AtomicFile> trace_file, events_file;
   if (!options.trace_path.empty()) trace_file = std::make_unique<AtomicFile>(options.trace_path);
@@ -249,7 +276,11 @@ RunResult run_scene(const RunOptions& options) {
                 << 100.0 * t / scene.end_time << " %)" << std::defaultfloat << std::flush;
     };
   }
-  simulation.run_until(scene.end_time, &observer, progress);
+  try {
+    simulation.run_until(scene.end_time, &observer, progress);
+  } catch (const InputError& e) {
+    throw in_scene(e);
+  }
   if (reported) std::cerr << "\r" << std::string(60, ' ') << "\r" << std::flush;
   result.cpu_time_s = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
   result.wall_time_s =
@@ -279,7 +310,9 @@ RunResult run_scene(const RunOptions& options) {
   std::unique_ptr<AtomicFile> sidecar;
   if (trace_file && !trace_file->streaming()) {
     sidecar = std::make_unique<AtomicFile>(options.trace_path + ".json");
-    sidecar->stream() << result.provenance.dump(2) << "\n";
+    sidecar->stream() << result.provenance.dump(2, ' ', false,
+                                                nlohmann::json::error_handler_t::replace)
+                      << "\n";
   }
   if (trace_file) trace_file->commit();
   if (events_file) events_file->commit();
