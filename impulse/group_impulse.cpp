@@ -304,9 +304,13 @@ GroupResult resolve_group(const std::vector<GroupBody>& bodies,
   // 3. No contact left approaching: the frictionless plastic impulse on what still approaches
   // (the cone problems stop at a tolerance; ill-conditioned groups may leave a residual approach).
   VecX l_p = VecX::Zero(3 * k);
-  const VecX u_e = J * q_e;
+  // A contact's floor (a microcollision's rebound speed) is met here too: the LCP on u_n - floor.
+  VecX u_e = J * q_e;
   double speed = 0.0;
-  for (int i = 0; i < k; ++i) speed = std::max(speed, u_e.segment<3>(3 * i).norm());
+  for (int i = 0; i < k; ++i) {
+    speed = std::max(speed, u_e.segment<3>(3 * i).norm());
+    u_e[3 * i + 2] -= contacts[i].min_separation;
+  }
   if (normal_lcp(A, u_e, 1e-13 * speed, l_p)) out.final_push = true;
   const VecX l = l_c + l_e + l_p;
   const VecX q_after = q + MinvJt * l;

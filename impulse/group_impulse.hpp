@@ -53,6 +53,9 @@ struct GroupContact {
   Vec3 n_W = Vec3::UnitZ();
   double friction = 0.0;     // mu
   double restitution = 0.0;  // Poisson's e, in [0, 1]
+  // The least normal velocity after [m/s]: a microcollision's rebound floor v_micro (0: none).
+  // Met by the last phase's frictionless push, which then adds the energy the floor needs.
+  double min_separation = 0.0;
 };
 
 struct GroupOptions {

@@ -24,6 +24,7 @@ std::optional<CollisionRecord> Simulation::Impl::collide_group(std::uint32_t ind
     BodyId a, b;
     Vec3 point_W, n_W;
     double approach;
+    double floor;  // a microcollision's rebound floor v_micro (0: an impact)
   };
   std::vector<Member> members;
   // An impact: an approach faster than the microcollision speed under the scene's full gravity,
@@ -34,6 +35,11 @@ std::optional<CollisionRecord> Simulation::Impl::collide_group(std::uint32_t ind
   // it was (states extrapolated here, closest features from a copy of each pair's cache).
   auto state_at = [&](BodyId id) { return body(id).state.t < t ? extrapolate(id, t) : body(id).state; };
   // A contact that approaches at an impact's speed, at its point.
+  // Microcollisions group too (a ball resting in a V-groove bounces off both walls at once):
+  // a group started by one gathers the other contacts approaching at microcollision speed, each
+  // with its own rebound floor. Not under the persistent model, which holds resting contact.
+  bool micro = false;
+  double micro_join = 0.0;
   auto add_contact = [&](std::uint32_t pair, const Contact& c, const BodyState& s1,
                          const BodyState& s2) {
     // (A face landing on a dynamic face - its patch's corners as one group - is not grouped
@@ -41,11 +47,28 @@ std::optional<CollisionRecord> Simulation::Impl::collide_group(std::uint32_t ind
     // their exactly parallel faces into a cycle; issue 15's note.)
     for (const Vec3& q : {c.point_W}) {
       const double u_n = (point_velocity_W(s1, q) - point_velocity_W(s2, q)).dot(c.n_W);
+      if (micro) {
+        // Approaching, or as near to it as the one that started the group (an e = 0 impact
+        // leaves both walls of a groove at u_n = 0 to rounding).
+        if (u_n <= micro_join && u_n >= -impact_speed) {
+          members.push_back(Member{pair, c.a, c.b, q, c.n_W, -u_n, c.v_micro});
+        }
+        continue;
+      }
       if (!(u_n < -impact_speed)) continue;
-      members.push_back(Member{pair, c.a, c.b, q, c.n_W, -u_n});
+      members.push_back(Member{pair, c.a, c.b, q, c.n_W, -u_n, 0.0});
     }
   };
+  {
+    const Vec3& q = first.point_W;
+    const double u_n = (point_velocity_W(body(p0.a).state, q) -
+                        point_velocity_W(body(p0.b).state, q)).dot(first.n_W);
+    micro_join = std::max(u_n, 0.0) + 1e-12 * impact_speed;
+    micro = !persistent() && u_n >= -impact_speed && first.v_micro > 0.0 &&
+            first.dynamic != DynamicSide::kBoth && first.patch.size() < 2;
+  }
   add_contact(index, first, body(p0.a).state, body(p0.b).state);
+  if (members.empty()) return std::nullopt;
   // Every other pair of the collision's dynamic bodies within the envelope at t.
   std::vector<std::uint32_t> others;
   for (BodyId id : {p0.a, p0.b}) {
@@ -77,7 +100,7 @@ std::optional<CollisionRecord> Simulation::Impl::collide_group(std::uint32_t ind
     for (BodyId id : {q.a, q.b}) {
       if (std::isfinite(pairs.geometry(id).reach())) reach += pairs.geometry(id).reach();
     }
-    if (contact.distance > kTouchingGap * reach) {
+    if (!micro && contact.distance > kTouchingGap * reach) {
       const ToiBound ahead = time_to_touch(body(q.a), s1, pairs.geometry(q.a), body(q.b), s2,
                                            pairs.geometry(q.b), contact, cache, world.gravity_W,
                                            settings());
@@ -101,7 +124,8 @@ std::optional<CollisionRecord> Simulation::Impl::collide_group(std::uint32_t ind
   for (const Member& m : members) {
     const Material& material = world.material(m.a, m.b);
     contacts.push_back(GroupContact{index_of(m.a), index_of(m.b), m.point_W, m.n_W,
-                                    material.friction, material.restitution});
+                                    material.friction, m.floor > 0.0 ? 0.0 : material.restitution,
+                                    m.floor});
   }
   std::vector<GroupBody> bodies;
   for (BodyId id : ids) {
@@ -136,7 +160,6 @@ std::optional<CollisionRecord> Simulation::Impl::collide_group(std::uint32_t ind
   for (std::size_t i = 0; i < members.size(); ++i) {
     CollisionRecord record;
     record.t = t;
-    record.kind = CollisionKind::kCollision;
     record.a = members[i].a;
     record.b = members[i].b;
     record.p_W = members[i].point_W;
@@ -152,7 +175,8 @@ std::optional<CollisionRecord> Simulation::Impl::collide_group(std::uint32_t ind
       record.energy_change += kinetic_energy(body(id), body(id).state) - kinetic_before[j];
     }
     pairs.pair(members[i].pair).last_collision_t = t;
-    ++stats.collisions;
+    record.kind = micro ? CollisionKind::kMicrocollision : CollisionKind::kCollision;
+    ++(micro ? stats.microcollisions : stats.collisions);
     if (observer) observer->on_collision(record);
     records.push_back(record);
   }

@@ -291,3 +291,28 @@ TEST_CASE("group: random groups create no energy, keep their cones and momentum,
   }
   WARN("groups that stopped at the iteration cap: " << unconverged << " of 2000");
 }
+
+// Microcollisions in a group: each contact leaves at no less than its rebound floor, and where
+// the floor pushes, exactly at it (the frictionless push is complementary to u_n - floor).
+TEST_CASE("group: a microcollision group meets every contact's rebound floor, no more",
+          "[group]") {
+  for (double groove : {kPi / 2, kPi / 3}) {
+    for (double mu : {0.0, 0.5}) {
+      CAPTURE(groove, mu);
+      const double a = 0.5 * (kPi - groove), r = 0.05, v_micro = 0.0443;
+      const Vec3 n1(std::sin(a), 0, std::cos(a)), n2(-std::sin(a), 0, std::cos(a));
+      const std::vector<GroupBody> bodies{ball(0.1, r, Vec3(0, 0, 0), Vec3(0, 0, -0.01)),
+                                          fixed()};
+      std::vector<GroupContact> contacts{{0, 1, -r * n1, n1, mu, 0.0, v_micro},
+                                         {0, 1, -r * n2, n2, mu, 0.0, v_micro}};
+      const GroupResult res = resolve_group(bodies, contacts);
+      for (int i = 0; i < 2; ++i) {
+        CHECK(res.normal_velocity[i] == Approx(v_micro).epsilon(1e-12));
+      }
+      CHECK(std::abs(res.v_W[0].x()) <= 1e-15);
+      CHECK(res.w_W[0].norm() <= 1e-13);
+      // Both floors met by a vertical rebound: v_z cos(a) = v_micro.
+      CHECK(res.v_W[0].z() == Approx(v_micro / std::cos(a)).epsilon(1e-12));
+    }
+  }
+}

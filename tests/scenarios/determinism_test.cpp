@@ -56,13 +56,13 @@ struct Expected {
 // The committed final-state hashes of the shipped scenes.
 const Expected kExpected[] = {
     {"ball_on_platter.json", 0xa16074210345a65bull},
-    {"balls_in_dish.json", 0x0049232b2ea655faull},
+    {"balls_in_dish.json", 0x6b7604b53b8c29d6ull},
     {"block_on_ramp_accelerating.json", 0x6b95d2cc13eadd0aull},
     {"block_on_ramp_decelerating.json", 0xa6bcfd47994a1366ull},
     {"bowling.json", 0xb0d10c42abe3878full},
-    {"chain_of_balls.json", 0x69cecbdff0e5ac8dull},
+    {"chain_of_balls.json", 0x429181db6bd6b161ull},
     {"coins.json", 0xd69371922a102d5cull},
-    {"pool_break.json", 0x035c048fdc878601ull},
+    {"pool_break.json", 0x5043a3f291d079d8ull},
     {"sphere_slide_to_roll.json", 0x8d0cc90c21d15ce4ull},
 };
 
