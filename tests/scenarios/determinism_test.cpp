@@ -60,9 +60,9 @@ const Expected kExpected[] = {
     {"block_on_ramp_accelerating.json", 0x6b95d2cc13eadd0aull},
     {"block_on_ramp_decelerating.json", 0xa6bcfd47994a1366ull},
     {"bowling.json", 0xb0d10c42abe3878full},
-    {"chain_of_balls.json", 0x429181db6bd6b161ull},
+    {"chain_of_balls.json", 0x77e5ac8fe4550a70ull},
     {"coins.json", 0xd69371922a102d5cull},
-    {"pool_break.json", 0x5043a3f291d079d8ull},
+    {"pool_break.json", 0x10358a591eee5f9bull},
     {"sphere_slide_to_roll.json", 0x8d0cc90c21d15ce4ull},
 };
 
