@@ -34,42 +34,32 @@ std::optional<CollisionRecord> Simulation::Impl::collide_group(std::uint32_t ind
   // Nothing is committed or cached until a group forms: a lone contact leaves the run exactly as
   // it was (states extrapolated here, closest features from a copy of each pair's cache).
   auto state_at = [&](BodyId id) { return body(id).state.t < t ? extrapolate(id, t) : body(id).state; };
-  // A contact that approaches at an impact's speed, at its point.
-  // Microcollisions group too (a ball resting in a V-groove bounces off both walls at once):
-  // a group started by one gathers the other contacts approaching at microcollision speed, each
-  // with its own rebound floor. Not under the persistent model, which holds resting contact.
-  bool micro = false;
-  double micro_join = 0.0;
+  auto normal_velocity = [](const Contact& c, const BodyState& s1, const BodyState& s2) {
+    return (point_velocity_W(s1, c.point_W) - point_velocity_W(s2, c.point_W)).dot(c.n_W);
+  };
+  // Impacts group with impacts. Microcollisions group too (a ball resting in a V-groove bounces
+  // off both walls at once), not under the persistent model, which holds resting contact: one
+  // gathers the contacts that gravity presses together (v_micro > 0) approaching at most at an
+  // impact's speed, or as near to approaching as itself (an e = 0 impact leaves both walls of a
+  // groove at u_n = 0 to rounding), each with its own rebound floor. Two balls rolling side by
+  // side touch at u_n = 0 too, without v_micro: taken plastically into a cloth's microcollision,
+  // their contact broke the pool break's mirror symmetry (0.13 m by 0.2 s). A face landing on a
+  // dynamic face (its patch's corners as one group) is not grouped yet: resolved symmetrically,
+  // two boxes turning alike sent the closest-feature walk of their exactly parallel faces into a
+  // cycle (issue 15's note).
+  const double first_u_n = normal_velocity(first, body(p0.a).state, body(p0.b).state);
+  const bool micro = !persistent() && first_u_n >= -impact_speed && first.v_micro > 0.0 &&
+                     first.dynamic != DynamicSide::kBoth && first.patch.size() < 2;
+  const double micro_join = std::max(first_u_n, 0.0) + 1e-12 * impact_speed;
   auto add_contact = [&](std::uint32_t pair, const Contact& c, const BodyState& s1,
                          const BodyState& s2) {
-    // (A face landing on a dynamic face - its patch's corners as one group - is not grouped
-    // yet: resolved symmetrically, two boxes turning alike sent the closest-feature walk of
-    // their exactly parallel faces into a cycle; issue 15's note.)
-    for (const Vec3& q : {c.point_W}) {
-      const double u_n = (point_velocity_W(s1, q) - point_velocity_W(s2, q)).dot(c.n_W);
-      if (micro) {
-        // Approaching, or as near to it as the one that started the group (an e = 0 impact
-        // leaves both walls of a groove at u_n = 0 to rounding).
-        // Only contacts that gravity presses together (v_micro > 0): two rolling balls side
-        // by side touch at u_n = 0 too, and taking their contact plastically into a cloth's
-        // microcollision broke the pool break's mirror symmetry (0.13 m by 0.2 s).
-        if (u_n <= micro_join && u_n >= -impact_speed && c.v_micro > 0.0) {
-          members.push_back(Member{pair, c.a, c.b, q, c.n_W, -u_n, c.v_micro});
-        }
-        continue;
-      }
-      if (!(u_n < -impact_speed)) continue;
-      members.push_back(Member{pair, c.a, c.b, q, c.n_W, -u_n, 0.0});
+    const double u_n = normal_velocity(c, s1, s2);
+    if (micro && u_n <= micro_join && u_n >= -impact_speed && c.v_micro > 0.0) {
+      members.push_back(Member{pair, c.a, c.b, c.point_W, c.n_W, -u_n, c.v_micro});
+    } else if (!micro && u_n < -impact_speed) {
+      members.push_back(Member{pair, c.a, c.b, c.point_W, c.n_W, -u_n, 0.0});
     }
   };
-  {
-    const Vec3& q = first.point_W;
-    const double u_n = (point_velocity_W(body(p0.a).state, q) -
-                        point_velocity_W(body(p0.b).state, q)).dot(first.n_W);
-    micro_join = std::max(u_n, 0.0) + 1e-12 * impact_speed;
-    micro = !persistent() && u_n >= -impact_speed && first.v_micro > 0.0 &&
-            first.dynamic != DynamicSide::kBoth && first.patch.size() < 2;
-  }
   add_contact(index, first, body(p0.a).state, body(p0.b).state);
   if (members.empty()) return std::nullopt;
   // Every other pair of the collision's dynamic bodies within the envelope at t.
