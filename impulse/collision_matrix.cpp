@@ -40,6 +40,19 @@ void apply_impulse(const Vec3& p_W, ContactBody& body1, ContactBody& body2) {
   body2.w_W -= body2.inv_inertia_W * body2.r_W.cross(p_W);
 }
 
+HeldRotationResponse held_rotation_response(const ContactBody& body1, const Vec3& x1_W,
+                                            const ContactBody& body2, const Vec3& x2_W) {
+  HeldRotationResponse response;
+  const Mat3 d = skew(x2_W - x1_W);
+  if (!body1.inv_inertia_W.isZero(0.0) && !body2.inv_inertia_W.isZero(0.0)) {
+    const Mat3 inertia_sum = body1.inv_inertia_W.inverse() + body2.inv_inertia_W.inverse();
+    response.W = inertia_sum.inverse() * d;
+  }
+  const Mat3 K = (body1.inv_mass + body2.inv_mass) * Mat3::Identity() - d * response.W;
+  response.K_W = 0.5 * (K + K.transpose());
+  return response;
+}
+
 FrameProblem frame_problem(const ContactBody& body1, const ContactBody& body2, const Mat3& R_WC) {
   FrameProblem problem;
   // K is symmetrised in collision_matrix_W; R^T K R keeps that to rounding, which the integrator

@@ -34,6 +34,21 @@ Mat3 contact_frame_W(const Vec3& n_W);
 // Applies p_W to body 1 and -p_W to body 2 (v1 += p/m1, w1 += I1^-1 (r1 x p); body 2 opposite).
 void apply_impulse(const Vec3& p_W, ContactBody& body1, ContactBody& body2);
 
+// Two dynamic bodies face to face over a patch that holds their relative rotation (DESIGN.md §4's
+// centre-of-pressure rule for two dynamic bodies): an impulse p on body 1 and -p on body 2 at any
+// point of the patch, with the couple the pressure carries so that the faces stay parallel, turns
+// both bodies alike, dw1 = dw2 = W p with W = (I1 + I2)^-1 [d]x, d = x2 - x1, and changes the
+// relative velocity at the patch by du = K p, K = (1/m1 + 1/m2) 1 - [d]x (I1 + I2)^-1 [d]x - the
+// Schur complement of the rotation constraint, symmetric and positive definite, and the same for
+// every point of the patch. (From I1 dw = r1 x p + L and I2 dw = -r2 x p - L, L the couple.) A
+// body whose rotation something else holds (inverse inertia zero) holds the other's: W = 0.
+struct HeldRotationResponse {
+  Mat3 K_W = Mat3::Identity();
+  Mat3 W = Mat3::Zero();
+};
+HeldRotationResponse held_rotation_response(const ContactBody& body1, const Vec3& x1_W,
+                                            const ContactBody& body2, const Vec3& x2_W);
+
 // The collision of two bodies as the integrator sees it, in the contact frame R_WC (third column
 // the normal from body 2 to body 1): K_c = R^T K R and u0_c = R^T (u1 - u2).
 struct FrameProblem {

@@ -130,6 +130,15 @@ void constrain_rotation(const Contact& c, ContactBody& cd) {
   }
 }
 
+// A face on a face between two dynamic bodies: the response of the pair whose relative rotation
+// the patch holds, a body whose rotation its own support holds counted as of infinite inertia.
+HeldRotationResponse stack_response(const Contact& c) {
+  ContactBody b1 = c.body1, b2 = c.body2;
+  if (c.rotation_held1) b1.inv_inertia_W.setZero();
+  if (c.rotation_held2) b2.inv_inertia_W.setZero();
+  return held_rotation_response(b1, c.x1_W, b2, c.x2_W);
+}
+
 // One pass of stages 1 and 2: the impulse at the contact's present placement.
 struct Pass {
   ContactBody cb1, cb2;    // the effective bodies (stage 1)
@@ -158,7 +167,10 @@ Pass impulse_pass(const Contact& c, const ContactSide& side1, const ContactSide&
   // A stack carried by the microcollision meets the impulse with its whole mass (riders).
   if (stack_mass > 0.0) cd.inv_mass = 1.0 / stack_mass;
   // The same frame problem as impulse/'s resolve_collision (its tests are this path's tests).
-  const FrameProblem problem = frame_problem(pass.cb1, pass.cb2, R_WC);
+  FrameProblem problem = frame_problem(pass.cb1, pass.cb2, R_WC);
+  if (c.placement == Placement::kFace && c.dynamic == DynamicSide::kBoth) {
+    problem.K_c = R_WC.transpose() * stack_response(c).K_W * R_WC;
+  }
   const Mat3& K_c = problem.K_c;
   pass.u0_c = problem.u0_c;
   pass.micro = options.microcollisions && is_microcollision(pass.u0_c.z(), c.v_micro, settings);
@@ -239,6 +251,22 @@ PressureLocation locate_pressure(const Contact& c, const Vec3& p_W, bool first_p
       at.tip = !inside;
       at.to_W = c.patch[0] + c.segment_dir_W * std::clamp(s_pressure, 0.0, length);
     }
+  } else if (c.placement == Placement::kFace && c.dynamic == DynamicSide::kBoth) {
+    // The couple L on body 1 that holds the faces parallel, I1 dw - r1 x p, moves the pressure
+    // off the contact point by s with p_n (s x n) = L's in-plane part: s = n x L / p_n.
+    // (From body 2's side, -I2 dw - r2 x p, if body 1's rotation is held by its own support.)
+    const double pn = p_W.dot(c.n_W);
+    const Vec3 dw = stack_response(c).W * p_W;
+    const Vec3 couple = !c.rotation_held1 ? Vec3(c.body1.inv_inertia_W.inverse() * dw -
+                                                 c.body1.r_W.cross(p_W))
+                        : !c.rotation_held2 ? Vec3(-(c.body2.inv_inertia_W.inverse() * dw) -
+                                                   c.body2.r_W.cross(p_W))
+                                            : Vec3::Zero();
+    at.pressure_W = pn > 0.0 || pn < 0.0 ? Vec3(c.point_W + c.n_W.cross(couple) / pn) : c.point_W;
+    if (!inside_convex_polygon(c.patch, c.n_W, at.pressure_W)) {
+      at.move = at.tip = true;
+      at.to_W = exit_point(c.patch, c.n_W, c.point_W, at.pressure_W);
+    }
   } else if (c.placement == Placement::kFace) {
     // Where does the line of action through the centre of mass meet the contact plane?
     const double pn = p_W.dot(c.n_W);
@@ -296,6 +324,15 @@ Placement place_over_patch(Contact& c, const BodyState& s1, const BodyState& s2,
   if (settings.centre_of_pressure && one_dynamic && c.patch.size() >= 3 &&
       face_rests_on_face(c.patch, x_dynamic, w_in, rocking_limit)) {
     c.point_W = foot_W;
+    return Placement::kFace;
+  }
+  if (settings.centre_of_pressure && c.dynamic == DynamicSide::kBoth && c.patch.size() >= 3 &&
+      face_rests_on_face(c.patch, c.x1_W, w_in, rocking_limit) &&
+      face_rests_on_face(c.patch, c.x2_W, w_in, rocking_limit)) {
+    // Two dynamic bodies face to face (a stack): the patch holds their relative rotation
+    // (held_rotation_response), whose impulse is the same at every point of the patch; the
+    // centroid is where it starts, the centre of pressure is found from the couple it needs.
+    c.point_W = centroid;
     return Placement::kFace;
   }
   if (settings.centre_of_pressure && one_dynamic && c.patch.size() == 2 && along.allFinite() &&
@@ -429,7 +466,7 @@ bool carries_riders(const Contact& c, const Settings& settings, const Vec3& grav
   // storm of m_heavy / m_light of them (tests/tools/extremes_test.cpp). Only over a face resting
   // on its support (the centre-of-pressure rule: the carrier does not turn, so the stack's mass
   // is all the impulse meets).
-  if (c.placement != Placement::kFace) return false;
+  if (c.placement != Placement::kFace || c.dynamic == DynamicSide::kBoth) return false;
   if (!is_microcollision(initial_normal_velocity(c), c.v_micro, settings)) return false;
   if (gravity_W.squaredNorm() == 0.0) return false;
   const Vec3 n_up = c.dynamic1() ? c.n_W : Vec3(-c.n_W);  // from the support up
@@ -453,6 +490,20 @@ namespace {
 // is the same when those axes are principal, as for a box or a coin lying flat, but adds energy
 // to a body whose principal axes are tilted to them: a coin rolling on its rim's edge.)
 void stop_rocking(const Contact& c, ContactBody& cb1, ContactBody& cb2) {
+  if (c.dynamic == DynamicSide::kBoth) {
+    // Between two dynamic bodies the couple is L on body 1 and -L on body 2, in the plane,
+    // sized so that their relative rocking stops: a = T^T (I1^-1 + I2^-1) T, L = -a^-1 T^T w_rel.
+    const Mat3 inv_i1 = c.rotation_held1 ? Mat3::Zero() : c.body1.inv_inertia_W;
+    const Mat3 inv_i2 = c.rotation_held2 ? Mat3::Zero() : c.body2.inv_inertia_W;
+    const Mat3 frame = contact_frame_W(c.n_W);
+    Eigen::Matrix<double, 3, 2> T = frame.leftCols<2>();
+    const Eigen::Matrix2d a = T.transpose() * (inv_i1 + inv_i2) * T;
+    if (!(a.determinant() > 0.0)) return;
+    const Vec3 couple = T * -(a.inverse() * (T.transpose() * (cb1.w_W - cb2.w_W)));
+    cb1.w_W += inv_i1 * couple;
+    cb2.w_W -= inv_i2 * couple;
+    return;
+  }
   ContactBody& cd = c.dynamic1() ? cb1 : cb2;
   const Vec3 w_rel = c.dynamic1() ? cb1.w_W - cb2.w_W : cb2.w_W - cb1.w_W;
   // The body's own inertia (the impulse pass saw the rule's constrained one).
@@ -524,7 +575,16 @@ Resolution resolve(Contact c, const ContactSide& side1, const ContactSide& side2
   }
   ContactBody& cb1 = pass.cb1;
   ContactBody& cb2 = pass.cb2;
-  apply_impulse(pass.p_W, cb1, cb2);
+  if (c.placement == Placement::kFace && c.dynamic == DynamicSide::kBoth) {
+    // The patch holds the relative rotation: both bodies turn alike (held_rotation_response).
+    const Vec3 dw = stack_response(c).W * pass.p_W;
+    cb1.v_W += cb1.inv_mass * pass.p_W;
+    cb2.v_W -= cb2.inv_mass * pass.p_W;
+    cb1.w_W += dw;
+    cb2.w_W += dw;
+  } else {
+    apply_impulse(pass.p_W, cb1, cb2);
+  }
   if (c.centre_of_pressure()) stop_rocking(c, cb1, cb2);
   resist_rotation(c, material, pass.p_W.dot(c.n_W), at.pressure_W, cb1, cb2);
   out.v1_W = side1.body.is_dynamic() ? cb1.v_W : side1.state.v_W;

@@ -13,7 +13,14 @@
 //    centre of mass, so a sliding block does not rock from corner to corner; where that line
 //    leaves the patch the body really tips, about the patch boundary;
 //  - an edge on a face (a segment patch): only the rotation about n x s is held, so a rod or a
-//    coin on its rim still rolls and tips about the segment.
+//    coin on its rim still rolls and tips about the segment;
+//  - a face on a face between two dynamic bodies (a stack; DESIGN.md §4's last case): the patch
+//    holds their relative rotation - the pressure carries the couple that keeps the faces
+//    parallel - so both turn alike, by (I1 + I2)^-1 (x2 - x1) x p, whatever the point
+//    (impulse/collision_matrix.hpp, held_rotation_response); a body whose own face rests on a
+//    fixed or kinematic support (rotation_held, set by the event loop) turns neither. The
+//    centre of pressure is where that couple puts the impulse; outside the patch the body tips
+//    about its boundary, as over a fixed face.
 //
 // A collision is resolved in named stages (resolve): effective inertia (the rule's constraint on
 // rotation) -> impulse (integration over p_z, or a microcollision) -> locate the pressure (at
@@ -114,6 +121,12 @@ struct Contact {
   double gap = 0.0;
   Vec3 plane2_W = Vec3::Zero();
   std::vector<Vec3> patch;  // the contact patch (empty: a point), counter-clockwise about n
+  // A face on a face between two dynamic bodies: whether each body's rotation is held by a face
+  // of its own resting on a fixed or kinematic support, directly or through bodies stacked face
+  // on face (set by the event loop, which sees the other pairs; make_contact leaves them false).
+  // The patch then holds the other body's rotation too: both meet the impulse with their masses
+  // alone, and the pressure acts below the free body's centre of mass.
+  bool rotation_held1 = false, rotation_held2 = false;
 
   bool slip_at_centre() const {
     return placement == Placement::kSphere || placement == Placement::kFace ||

@@ -44,6 +44,37 @@ void Simulation::Impl::collect_riders(BodyId id, double t, int depth, std::vecto
   }
 }
 
+bool Simulation::Impl::seated(BodyId id, BodyId above, double t, int depth) {
+  if (depth > kMaxRiderDepth || world.gravity_W.squaredNorm() == 0.0) return false;
+  const Vec3 up = -world.gravity_W.normalized();
+  for (std::uint32_t index : pairs.body(id).pairs) {
+    PairSet::Pair& q = pairs.pair(index);
+    const BodyId other = q.a == id ? q.b : q.a;
+    if (other == above) continue;
+    const BodyState s1 = extrapolate(q.a, t), s2 = extrapolate(q.b, t);
+    ++stats.bound_queries;
+    const DistanceResult dr = query(q, s1, s2);  // warms the pair's cache only
+    const DistanceResult& contact = contact_result(q, s1, s2, dr);
+    if (contact.status != ContactStatus::kSeparated && contact.status != ContactStatus::kTouching) {
+      continue;
+    }
+    if (contact.distance > derived_rider_distance(settings())) continue;
+    const Vec3 n_up = q.a == id ? contact.n_W : Vec3(-contact.n_W);  // from `other` up to `id`
+    if (n_up.dot(up) <= kSupportCosine) continue;
+    const Contact c = make_contact(side(q.a, s1), side(q.b, s2), contact, settings(),
+                                   world.gravity_W, /*with_patch=*/true);
+    if (c.placement != Placement::kFace) continue;
+    if (!body(other).is_dynamic() || seated(other, id, t, depth + 1)) return true;
+  }
+  return false;
+}
+
+void Simulation::Impl::mark_held_rotations(const PairSet::Pair& p, Contact& c, double t) {
+  if (c.placement != Placement::kFace || c.dynamic != DynamicSide::kBoth) return;
+  c.rotation_held1 = seated(p.a, p.b, t, 0);
+  c.rotation_held2 = seated(p.b, p.a, t, 0);
+}
+
 CollisionRecord Simulation::Impl::collide(const PairSet::Pair& p, Contact& c, double t,
                                           const ResolveOptions& options) {
   std::vector<BodyId> rider_ids;
@@ -168,6 +199,7 @@ std::optional<CollisionRecord> Simulation::Impl::check_pair(std::uint32_t index,
     p.collisions_at_t = 0;
   }
   if (auto group = collide_group(index, c, t)) return group;
+  mark_held_rotations(p, c, t);
   if (persistent()) return collide_or_hold(index, c, DistanceResult(contact), t);
   CollisionRecord record = collide(p, c, t);
   if (observer) observer->on_collision(record);

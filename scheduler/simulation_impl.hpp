@@ -136,6 +136,15 @@ struct Simulation::Impl {
   // and those riding on them, up to kMaxRiderDepth levels. Appended to `riders` (no repeats).
   void collect_riders(BodyId id, double t, int depth, std::vector<BodyId>& riders);
 
+  // Is body `id`'s rotation held at time t by a face of its own resting on a fixed or kinematic
+  // support (a face-on-face contact within two envelopes - a microcollision train bounces a
+  // body up to 1.5 - its normal within 60 degrees of the
+  // vertical, not rocking), directly or through dynamic bodies stacked face on face below it, up
+  // to kMaxRiderDepth levels? `above`: the body on top of it, not a support.
+  bool seated(BodyId id, BodyId above, double t, int depth);
+  // Sets a contact's rotation_held flags (a face on a face between two dynamic bodies).
+  void mark_held_rotations(const PairSet::Pair& p, Contact& c, double t);
+
   // Resolves the collision of contact `c` (of pair `p`, states committed at t), commits the new
   // velocities and returns the record.
   CollisionRecord collide(const PairSet::Pair& p, Contact& c, double t,

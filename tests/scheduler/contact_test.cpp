@@ -237,15 +237,128 @@ TEST_CASE("contact: placements of spheres and of two dynamic bodies face to face
     CHECK(c.slip_at_centre());
   }
   {
-    // DESIGN.md §4's rule for two dynamic bodies face to face is not implemented: the corner
-    // landing first takes the collision.
+    // Two dynamic bodies face to face: the patch holds their relative rotation (DESIGN.md §4's
+    // rule for a stack), found at the patch's centroid.
     const Posed posed(test::box_body("top", Vec3(0.1, 0.1, 0.1), 1.0, Vec3(0, 0, 0.3 + 2e-5),
                                      Quat::Identity(), Vec3(0, 0, -0.2)),
                       test::box_body("bottom", Vec3(0.1, 0.1, 0.1), 1.0, Vec3(0, 0, 0.1)));
     const Contact c = posed.contact();
     CHECK(c.dynamic == DynamicSide::kBoth);
     CHECK(c.patch.size() == 4);
-    CHECK(c.placement == Placement::kPoint);
+    CHECK(c.placement == Placement::kFace);
+    CHECK(c.point_W.x() == Approx(0.0).margin(1e-15));
+    CHECK(c.point_W.y() == Approx(0.0).margin(1e-15));
+  }
+  {
+    // Rocking relative to each other faster than the microcollision speed: the corner.
+    const Posed posed(test::box_body("top", Vec3(0.1, 0.1, 0.1), 1.0, Vec3(0, 0, 0.3 + 2e-5),
+                                     Quat::Identity(), Vec3(0, 0, -0.2), Vec3(0.5, 0, 0)),
+                      test::box_body("bottom", Vec3(0.1, 0.1, 0.1), 1.0, Vec3(0, 0, 0.1)));
+    CHECK(posed.contact().placement == Placement::kPoint);
+  }
+}
+
+namespace {
+
+// Linear and angular momentum (about the world origin) of two bodies, and their kinetic energy.
+struct Totals {
+  Vec3 p = Vec3::Zero(), l = Vec3::Zero();
+  double energy = 0.0;
+};
+Totals totals(const Body& b1, const BodyState& s1, const Body& b2, const BodyState& s2) {
+  Totals t;
+  for (const auto& [b, s] : {std::pair{&b1, &s1}, std::pair{&b2, &s2}}) {
+    t.p += b->mass.mass * s->v_W;
+    t.l += angular_momentum_W(b->mass, *s) + s->x_W.cross(b->mass.mass * s->v_W);
+    t.energy += kinetic_energy(*b, *s);
+  }
+  return t;
+}
+
+BodyState after(const BodyState& s, const Vec3& v, const Vec3& w) {
+  BodyState out = s;
+  out.v_W = v;
+  out.w_W = w;
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("contact: a box landing flat on a dynamic box acts through the patch, turning neither",
+          "[contact][group]") {
+  // A 1 kg box onto a 2 kg box (0.2 m cubes) at 0.2 m/s, in both pair orders. Frictionless,
+  // e = 0.5: the impulse meets the reduced mass alone, p_n = 1.5 m_red 0.2, and neither turns.
+  // With mu = 0.3 and a slide of 0.3 m/s along x: friction's couple d x p turns both alike
+  // (W = (I1 + I2)^-1 [d]x), the faces stay parallel, and momentum and angular momentum are
+  // kept, energy is not created.
+  for (bool top_first : {true, false}) {
+    for (double mu : {0.0, 0.3}) {
+      CAPTURE(top_first, mu);
+      const Body top = test::box_body("top", Vec3(0.1, 0.1, 0.1), 1.0, Vec3(0, 0, 0.3 + 2e-5),
+                                      Quat::Identity(), Vec3(mu > 0 ? 0.3 : 0.0, 0, -0.2));
+      const Body bottom = test::box_body("bottom", Vec3(0.1, 0.1, 0.1), 2.0, Vec3(0, 0, 0.1));
+      const Posed posed = top_first ? Posed(top, bottom) : Posed(bottom, top);
+      const Contact c = posed.contact();
+      REQUIRE(c.placement == Placement::kFace);
+      const Resolution r = posed.resolve_it(Material{mu, 0.5});
+      CHECK(r.outcome == PressureOutcome::kWithinPatch);
+      CHECK(r.record.centre_of_pressure);
+      const BodyState s1 = after(posed.body1.state, r.v1_W, r.w1_W);
+      const BodyState s2 = after(posed.body2.state, r.v2_W, r.w2_W);
+      const BodyState& s_top = top_first ? s1 : s2;
+      const double m_red = 2.0 / 3.0;
+      CHECK(std::abs(r.record.impulse_W.z()) == Approx(1.5 * m_red * 0.2).epsilon(1e-12));
+      CHECK(s_top.v_W.z() == Approx(-0.2 + 1.5 * m_red * 0.2 / 1.0).epsilon(1e-12));
+      CHECK((r.w1_W - r.w2_W).norm() <= 1e-15);  // the faces stay parallel
+      const Totals before = totals(posed.body1, posed.body1.state, posed.body2, posed.body2.state);
+      const Totals now = totals(posed.body1, s1, posed.body2, s2);
+      CHECK((now.p - before.p).norm() <= 1e-15);
+      CHECK((now.l - before.l).norm() <= 1e-15);
+      CHECK(now.energy <= before.energy * (1.0 + 1e-15));
+      if (mu == 0.0) {
+        CHECK(r.w1_W.norm() == 0.0);
+        CHECK(r.w2_W.norm() == 0.0);
+      } else {
+        // Friction turns them about y, with the rate W p of held_rotation_response.
+        CHECK(std::abs(r.w1_W.y()) > 1e-3);
+        CHECK(r.w1_W.x() == Approx(0.0).margin(1e-15));
+      }
+    }
+  }
+}
+
+TEST_CASE("contact: a box landing on the edge of a dynamic box turns it, or tips over a heavy one",
+          "[contact][group]") {
+  // The top box overhangs by three quarters of its width: its patch with the bottom box is a
+  // 5 cm strip under its far side, its centre of mass outside it. On an equal free box, the
+  // pressure that keeps the faces parallel lies at the strip's middle: the two turn together
+  // as one body (dw = (I1 + I2)^-1 d x p about +y, the same for both). On a box a thousand times
+  // heavier - nearly the ground - keeping the faces parallel would need a pressure outside the
+  // strip: the top tips about the strip's edge, as over a fixed face.
+  for (double mass : {1.0, 1000.0}) {
+    CAPTURE(mass);
+    const Posed posed(test::box_body("top", Vec3(0.1, 0.1, 0.1), 1.0, Vec3(0.15, 0, 0.3 + 2e-5),
+                                     Quat::Identity(), Vec3(0, 0, -0.2)),
+                      test::box_body("bottom", Vec3(0.1, 0.1, 0.1), mass, Vec3(0, 0, 0.1)));
+    const Contact c = posed.contact();
+    REQUIRE(c.placement == Placement::kFace);
+    const Resolution r = posed.resolve_it(Material{0.0, 0.5});
+    if (mass == 1.0) {
+      CHECK(r.outcome == PressureOutcome::kWithinPatch);
+      CHECK(r.w1_W.y() > 0.1);
+      CHECK((r.w1_W - r.w2_W).norm() <= 1e-15);
+    } else {
+      CHECK(r.outcome == PressureOutcome::kTipped);
+      CHECK(r.record.p_W.x() == Approx(0.1).margin(1e-12));  // on the bottom box's edge
+      CHECK(r.w1_W.y() > 0.1);  // the top turns down over the edge (+x down: about +y)
+      CHECK(r.w2_W.norm() < 1e-2 * r.w1_W.norm());
+    }
+    const Totals before = totals(posed.body1, posed.body1.state, posed.body2, posed.body2.state);
+    const Totals now = totals(posed.body1, after(posed.body1.state, r.v1_W, r.w1_W), posed.body2,
+                              after(posed.body2.state, r.v2_W, r.w2_W));
+    CHECK((now.p - before.p).norm() <= 1e-15 * mass);
+    CHECK((now.l - before.l).norm() <= 1e-15 * mass);
+    CHECK(now.energy <= before.energy * (1.0 + 1e-15));
   }
 }
 
