@@ -625,11 +625,20 @@ Resolution resolve(Contact c, const ContactSide& side1, const ContactSide& side2
   double kinetic_after = kinetic(side1.body, after1) + kinetic(side2.body, after2);
   if (carried) {
     // The riders move on with the carrier along the normal (a plastic merge with the stack,
-    // which the impulse on the stack's mass assumed); they keep their sliding and spin.
+    // which the impulse on the stack's mass assumed), and friction carries the carrier's change
+    // of tangential velocity to them as far as its cone allows (mu times their normal change):
+    // a box on a block that floor friction slows is slowed with it, not left sliding off. They
+    // keep their own sliding and spin.
     const Vec3& v_carrier = c.dynamic1() ? out.v1_W : out.v2_W;
+    const Vec3 dv_carrier = v_carrier - (c.dynamic1() ? side1 : side2).state.v_W;
+    const Vec3 dv_tangential = dv_carrier - c.n_W * c.n_W.dot(dv_carrier);
     for (const Rider& r : riders) {
       BodyState after = r.state;
-      after.v_W += c.n_W * c.n_W.dot(v_carrier - after.v_W);
+      const double dv_normal = c.n_W.dot(v_carrier - after.v_W);
+      after.v_W += c.n_W * dv_normal;
+      const double limit = r.friction * std::abs(dv_normal);
+      const double dv_t = dv_tangential.norm();
+      after.v_W += dv_t <= limit ? dv_tangential : Vec3(dv_tangential * (limit / dv_t));
       out.rider_v_W.push_back(after.v_W);
       record.carried.push_back(r.id);
       kinetic_after += kinetic(r.body, after);

@@ -182,6 +182,7 @@ struct Rider {
   BodyId id;
   const Body& body;
   const BodyState& state;  // at the contact instant
+  double friction = 0.0;   // mu between the rider and the body it rests on
 };
 
 // How the resolution ended (DESIGN.md §4's centre-of-pressure rule).

@@ -12,7 +12,8 @@
 
 namespace palpable {
 
-void Simulation::Impl::collect_riders(BodyId id, double t, int depth, std::vector<BodyId>& riders) {
+void Simulation::Impl::collect_riders(BodyId id, double t, int depth, std::vector<BodyId>& riders,
+                                      std::vector<BodyId>& supports) {
   if (depth > kMaxRiderDepth || world.gravity_W.squaredNorm() == 0.0) return;
   const Vec3 up = -world.gravity_W.normalized();
   // query() only warms a pair's cache: the pair lists do not change here.
@@ -40,7 +41,8 @@ void Simulation::Impl::collect_riders(BodyId id, double t, int depth, std::vecto
       continue;
     }
     riders.push_back(other);
-    collect_riders(other, t, depth + 1, riders);
+    supports.push_back(id);
+    collect_riders(other, t, depth + 1, riders, supports);
   }
 }
 
@@ -77,13 +79,16 @@ void Simulation::Impl::mark_held_rotations(const PairSet::Pair& p, Contact& c, d
 
 CollisionRecord Simulation::Impl::collide(const PairSet::Pair& p, Contact& c, double t,
                                           const ResolveOptions& options) {
-  std::vector<BodyId> rider_ids;
+  std::vector<BodyId> rider_ids, rider_supports;
   if (options.microcollisions && carries_riders(c, settings(), world.gravity_W)) {
-    collect_riders(c.dynamic1() ? p.a : p.b, t, 0, rider_ids);
+    collect_riders(c.dynamic1() ? p.a : p.b, t, 0, rider_ids, rider_supports);
     for (BodyId r : rider_ids) commit(r, t);
   }
   std::vector<Rider> riders;
-  for (BodyId r : rider_ids) riders.push_back(Rider{r, body(r), body(r).state});
+  for (std::size_t k = 0; k < rider_ids.size(); ++k) {
+    riders.push_back(Rider{rider_ids[k], body(rider_ids[k]), body(rider_ids[k]).state,
+                           world.material(rider_ids[k], rider_supports[k]).friction});
+  }
   Resolution out = resolve(c, side(p.a, body(p.a).state), side(p.b, body(p.b).state),
                            world.material(p.a, p.b), settings(), riders, t, options);
   stats.integration_steps += static_cast<std::uint64_t>(out.integration_steps);

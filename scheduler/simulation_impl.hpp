@@ -133,8 +133,10 @@ struct Simulation::Impl {
   // The dynamic bodies riding on body `id` at time t: resting on it (within two envelopes, a
   // microcollision bounces a body up to 1.5; the normal within 60 degrees of the vertical;
   // at rest on it along the normal or settling onto it slower than the microcollision speed),
-  // and those riding on them, up to kMaxRiderDepth levels. Appended to `riders` (no repeats).
-  void collect_riders(BodyId id, double t, int depth, std::vector<BodyId>& riders);
+  // and those riding on them, up to kMaxRiderDepth levels. Appended to `riders` (no repeats),
+  // each with the body it rests on appended to `supports`.
+  void collect_riders(BodyId id, double t, int depth, std::vector<BodyId>& riders,
+                      std::vector<BodyId>& supports);
 
   // Is body `id`'s rotation held at time t by a face of its own resting on a fixed or kinematic
   // support (a face-on-face contact within two envelopes - a microcollision train bounces a

@@ -356,6 +356,36 @@ TEST_CASE("a stack of three boxes, 1, 10 and 100 kg from the bottom, rests witho
   CHECK(carried == 2);
 }
 
+TEST_CASE("a box on a sliding block is carried by friction and stops with it", "[scheduler][stack]") {
+  // A 0.5 kg box on a 1 kg block (mu 1 between them), launched together at 1 m/s on a floor with
+  // mu 0.3: friction decelerates the pair at 0.3 g, both stop after 1 / (2 0.3 g) = 0.16990 m.
+  // The block bounces in microcollisions carrying the box (a rider); friction passes the block's
+  // change of tangential velocity on to it. (Given only the normal velocity, the box slid on
+  // at 1 m/s and fell off the block at 0.46 m.)
+  World world;
+  world.default_material = Material{1.0, 0.5};
+  world.add(fixed_ground());
+  for (int i = 0; i < 2; ++i) {
+    Body box;
+    box.name = i == 0 ? "block" : "box";
+    box.shape = std::make_shared<const Shape>(
+        ConvexPolyhedron::box(i == 0 ? Vec3(0.1, 0.1, 0.05) : Vec3(0.05, 0.05, 0.05)));
+    box.mass = mass_properties_from_mass(*box.shape, i == 0 ? 1.0 : 0.5);
+    box.state.x_W = Vec3(0.0, 0.0, 0.05 + 0.1 * i);
+    box.state.v_W = Vec3(1.0, 0.0, 0.0);
+    world.add(box);
+  }
+  world.pair_materials.push_back(PairMaterial{BodyId{0}, BodyId{1}, Material{0.3, 0.5}});
+  Simulation sim(world, SimulationOptions{});
+  sim.run_until(1.0, nullptr);
+  const BodyState block = sim.state_at(BodyId{1}, 1.0), box = sim.state_at(BodyId{2}, 1.0);
+  CHECK(std::abs(box.x_W.x() - block.x_W.x()) <= 1e-9);  // no slide between them
+  CHECK(box.v_W.head<2>().norm() == 0.0);
+  CHECK(box.x_W.z() - block.x_W.z() == Approx(0.1).margin(2.0 * world.settings.envelope_m));
+  // The microcollision model's stop: within its blur (2.1e-5 m measured) of the closed form.
+  CHECK(block.x_W.x() == Approx(1.0 / (2.0 * 0.3 * 9.81)).margin(1e-4));
+}
+
 namespace {
 
 // A bowling pin as in scenarios/bowling.json (generate_scenes.py): the hull of 12-gon rings
