@@ -156,7 +156,7 @@ inline double derived_progress_floor(const Settings& s, double t) {
 // cosine with up exceeds this [-].
 inline constexpr double kSupportCosine = 0.5;
 // Riders are collected through at most this many levels of bodies resting on bodies [-].
-inline constexpr int kMaxRiderDepth = 8;
+inline constexpr int kMaxRiderDepth = 64;
 // A contact pressed by gravity is approaching (collides) while u_n <= this x v_micro [-]: what an
 // e = 0 collision leaves is rounding, and must collide again.
 inline constexpr double kRestingApproachSlack = 1e-9;
