@@ -521,3 +521,40 @@ TEST_CASE("smooth shapes dropped tilted and spinning behave under both contact m
     CHECK(energy(samples.back()) < 0.5 * e0);
   }
 }
+
+TEST_CASE("a true cylinder rolls down a 10 degree slope at about g sin(theta) / 1.5",
+          "[scheduler][smooth]") {
+  // From rest, mu = 1 (rolling needs mu >= tan(theta) / 3), e = 0: a solid cylinder (k = 1/2)
+  // rolls at a = g sin(theta) / (1 + k). Its side touches the slope along a segment, a curved
+  // contact, so under either contact model it rolls as a train of microcollisions: its mean
+  // motion carries their jitter. Measured (least-squares fit of s = s0 + v0 t + a t^2 / 2 over
+  // 1 s): a within 3.4e-4 of the closed form at the default envelope 1e-4 m, 1.7e-5 at 1e-5 m and
+  // 3.7e-5 at 1e-6 m — far from the issue's 1e-9, which needs rolling held as persistent contact.
+  const double kPi = 3.14159265358979323846;
+  const double theta = 10.0 * kPi / 180.0, r = 0.05, g = 9.81;
+  const Vec3 n(std::sin(theta), 0.0, std::cos(theta));
+  World world;
+  world.default_material = Material{1.0, 0.0};
+  world.add(test::fixed_body("slope", make_halfspace(n, 0.0)));
+  world.add(test::dynamic_body("cylinder", make_cylinder(r, 0.05), 1.0, r * n,
+                               test::about(Vec3::UnitX(), kPi / 2)));
+  const test::Run run = test::run(world, 1.0, 0.01);
+  CHECK(run.stats.penetrations == 0);
+  const Vec3 down(std::cos(theta), 0.0, -std::sin(theta));
+  // Least squares for (s0, v0, a/2) by the normal equations.
+  Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d b = Eigen::Vector3d::Zero();
+  for (std::size_t k = 0; k < run.recorded.times.size(); ++k) {
+    const double t = run.recorded.times[k];
+    const Eigen::Vector3d basis(1.0, t, t * t);
+    A += basis * basis.transpose();
+    b += basis * down.dot(run.recorded.samples[k][1].x_W);
+  }
+  const double a = 2.0 * A.ldlt().solve(b)(2);
+  const double a_closed = g * std::sin(theta) / 1.5;
+  CAPTURE(a, a_closed);
+  CHECK(std::abs(a - a_closed) / a_closed < 1e-3);
+  // Rolling, not sliding: it moved as far as rolling allows and turned with it.
+  const BodyState& end = run.final_states[1];
+  CHECK(std::abs(r * end.w_W.norm() - down.dot(end.v_W)) < 0.01 * down.dot(end.v_W));
+}
