@@ -28,6 +28,12 @@ ShapeGeometry::ShapeGeometry(std::shared_ptr<const Shape> shape) : shape_(std::m
     const bool centred_sphere = piece.kind == PieceKind::kSphere && piece.p_M.norm() == 0.0;
     if (!centred_sphere) rotation_radius_ = std::max(rotation_radius_, reach);
   }
+  if (std::holds_alternative<LoadedBall>(*shape_)) {
+    // A ball's surface maps onto itself under rotation about its centre, so rotation about the
+    // centre of mass moves its support point along any direction only as fast as the centre,
+    // |omega| |com_offset|; the radius does not count.
+    rotation_radius_ = pieces_.front().p_M.norm();
+  }
 }
 
 void ShapeGeometry::add_piece(const Shape& shape, const Vec3& p_M, const Mat3& R_M) {

@@ -63,8 +63,9 @@ class ShapeGeometry {
   const Shape& shape() const { return *shape_; }
   const std::vector<Piece>& pieces() const { return pieces_; }
   // The largest distance from the origin of M that rotation about it can move a surface point
-  // through [m]: 0 for a sphere centred at the origin (its surface maps onto itself), the maximum
-  // radius otherwise; +inf with a halfspace piece.
+  // through [m]: 0 for a sphere centred at the origin (its surface maps onto itself), the distance
+  // of its centre for a loaded ball (the same argument about the centre), the maximum radius
+  // otherwise; +inf with a halfspace piece.
   double rotation_radius() const { return rotation_radius_; }
   // The largest distance from the origin of M to any point of the shape [m] (+inf: halfspace).
   double reach() const { return reach_; }

@@ -658,3 +658,29 @@ TEST_CASE("smooth shapes: patch of a cylinder's cap, a cylinder's and a capsule'
     CHECK((patch[0] - Vec3::Zero()).norm() <= 1e-15);
   }
 }
+
+TEST_CASE("smooth shapes: the radii the time-of-impact bound uses", "[distance][smooth]") {
+  // A loaded ball's surface turns onto itself about its centre: rotation about the centre of mass
+  // moves its support point no faster than the centre moves (|omega| |offset|); every other smooth
+  // shape sweeps its whole radius.
+  const TestShape ball = make_test_shape("loaded ball", make_loaded_ball(0.3, -0.1));
+  CHECK(ball.geometry->rotation_radius() == Approx(0.1).epsilon(1e-15));
+  CHECK(ball.geometry->reach() == Approx(0.4).epsilon(1e-15));
+  const TestShape disk = make_test_shape("disk", make_cylinder(0.4, 0.3));
+  CHECK(disk.geometry->rotation_radius() == Approx(0.5).epsilon(1e-15));
+  CHECK(disk.geometry->reach() == Approx(0.5).epsilon(1e-15));
+  // Along any direction, the support point of the ball rotated by a small angle moves at most
+  // |offset| times the angle.
+  std::mt19937_64 rng(1607);
+  for (int k = 0; k < 1000; ++k) {
+    const Quat q = random_rotation(rng);
+    std::normal_distribution<double> g(0.0, 1.0);
+    const Vec3 axis = Vec3(g(rng), g(rng), g(rng)).normalized();
+    const Vec3 d = Vec3(g(rng), g(rng), g(rng)).normalized();
+    const double angle = 1e-3;
+    const Quat q2 = Quat(Eigen::AngleAxisd(angle, axis)) * q;
+    const double moved = d.dot(support_W(*ball.shape, Vec3::Zero(), q2, d)) -
+                         d.dot(support_W(*ball.shape, Vec3::Zero(), q, d));
+    CHECK(std::abs(moved) <= 0.1 * angle * (1 + 1e-9));
+  }
+}
