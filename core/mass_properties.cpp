@@ -205,6 +205,50 @@ VolumeIntegrals shape_volume_integrals(const Shape& shape) {
     return out;
   }
   if (const auto* poly = std::get_if<ConvexPolyhedron>(&shape)) return volume_integrals(*poly);
+  if (const auto* e = std::get_if<Ellipsoid>(&shape)) {
+    // V = 4/3 pi abc; I_xx = V (b^2 + c^2) / 5 and cyclically.
+    const double kPi = 3.14159265358979323846;
+    const Vec3 sq = e->semi_axes_M.cwiseAbs2();
+    VolumeIntegrals out;
+    out.volume = 4.0 / 3.0 * kPi * e->semi_axes_M.prod();
+    out.inertia_about_centroid =
+        (out.volume / 5.0 * Vec3(sq.y() + sq.z(), sq.x() + sq.z(), sq.x() + sq.y())).asDiagonal();
+    return out;
+  }
+  if (const auto* c = std::get_if<Cylinder>(&shape)) {
+    // V = 2 pi r^2 h; I_zz = V r^2 / 2, I_xx = I_yy = V (r^2 / 4 + h^2 / 3) (length 2h).
+    const double kPi = 3.14159265358979323846;
+    const double r2 = c->radius * c->radius;
+    const double h2 = c->half_height * c->half_height;
+    VolumeIntegrals out;
+    out.volume = 2.0 * kPi * r2 * c->half_height;
+    const double transverse = out.volume * (r2 / 4.0 + h2 / 3.0);
+    out.inertia_about_centroid = Vec3(transverse, transverse, out.volume * r2 / 2.0).asDiagonal();
+    return out;
+  }
+  if (const auto* c = std::get_if<Capsule>(&shape)) {
+    // A cylinder of length 2h and two hemispheres. Each hemisphere (volume V_s / 2) has moment
+    // 2/5 (V_s / 2) r^2 about any axis through the centre of its flat face; its centroid is 3r/8
+    // from that face, so about the capsule's centre (parallel axes twice) both together give
+    // V_s (2/5 r^2 + h^2 + 3/4 h r) transversally and 2/5 V_s r^2 axially.
+    const double kPi = 3.14159265358979323846;
+    const double r = c->radius;
+    const double h = c->half_length;
+    const double v_cyl = 2.0 * kPi * r * r * h;
+    const double v_sph = 4.0 / 3.0 * kPi * r * r * r;
+    VolumeIntegrals out;
+    out.volume = v_cyl + v_sph;
+    const double transverse =
+        v_cyl * (r * r / 4.0 + h * h / 3.0) + v_sph * (0.4 * r * r + h * h + 0.75 * h * r);
+    const double axial = v_cyl * r * r / 2.0 + v_sph * 0.4 * r * r;
+    out.inertia_about_centroid = Vec3(transverse, transverse, axial).asDiagonal();
+    return out;
+  }
+  if (std::holds_alternative<LoadedBall>(shape)) {
+    throw InputError("shape",
+                     "a loaded ball's centre of mass is not its centroid: a uniform density "
+                     "cannot give its mass properties; give its mass and inertia");
+  }
   if (const auto* compound = std::get_if<Compound>(&shape)) {
     if (compound->parts.empty()) throw InputError("shape", "a compound needs at least one part");
     VolumeIntegrals out;

@@ -37,9 +37,12 @@ VolumeIntegrals volume_integrals(const ConvexPolyhedron& polyhedron);
 // for non-positive or non-finite values and for unbounded shapes.
 MassProperties mass_properties_from_density(const Shape& shape, double density);
 MassProperties mass_properties_from_mass(const Shape& shape, double mass);
-// The unit-density volume integrals of a bounded shape in its modelling frame: a sphere in closed
-// form, a polyhedron by volume_integrals, a compound as the sum of its posed parts (parallel-axis
-// theorem). Throws InputError for an unbounded shape.
+// The unit-density volume integrals of a bounded shape in its modelling frame: a sphere, ellipsoid,
+// cylinder or capsule in closed form, a polyhedron by volume_integrals, a compound as the sum of
+// its posed parts (parallel-axis theorem). Throws InputError for an unbounded shape and for a
+// loaded ball (uniform density cannot put its centre of mass off its centre: use
+// mass_properties_from_inertia with the ball's mass and inertia about its centre of mass, as a
+// scene's "inertia" key does).
 VolumeIntegrals shape_volume_integrals(const Shape& shape);
 // Infinite mass (fixed and kinematic bodies): mass and principal moments +inf, inverses zero.
 MassProperties infinite_mass_properties();

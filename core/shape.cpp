@@ -429,15 +429,87 @@ Halfspace make_halfspace(const Vec3& normal_M, double offset) {
   return Halfspace{normal_M / length, offset};
 }
 
+namespace {
+
+double positive_finite(const char* name, double value) {
+  if (!(std::isfinite(value) && value > 0.0)) {
+    throw InputError(name, "must be positive and finite, got " + std::to_string(value));
+  }
+  return value;
+}
+
+}  // namespace
+
+Ellipsoid make_ellipsoid(const Vec3& semi_axes_M) {
+  for (int i = 0; i < 3; ++i) {
+    if (!(std::isfinite(semi_axes_M[i]) && semi_axes_M[i] > 0.0)) {
+      throw InputError("semi_axes", "must be positive and finite, got " + format_vec(semi_axes_M));
+    }
+  }
+  return Ellipsoid{semi_axes_M};
+}
+
+Cylinder make_cylinder(double radius, double half_height) {
+  return Cylinder{positive_finite("radius", radius), positive_finite("half_height", half_height)};
+}
+
+Capsule make_capsule(double radius, double half_length) {
+  return Capsule{positive_finite("radius", radius), positive_finite("half_length", half_length)};
+}
+
+LoadedBall make_loaded_ball(double radius, double com_offset) {
+  positive_finite("radius", radius);
+  if (!(std::isfinite(com_offset) && std::abs(com_offset) < radius)) {
+    throw InputError("com_offset", "must be finite and smaller in size than the radius " +
+                                       std::to_string(radius) + ", got " +
+                                       std::to_string(com_offset));
+  }
+  return LoadedBall{radius, com_offset};
+}
+
+bool is_smooth_convex(const Shape& shape) {
+  return std::holds_alternative<Ellipsoid>(shape) || std::holds_alternative<Cylinder>(shape) ||
+         std::holds_alternative<Capsule>(shape) || std::holds_alternative<LoadedBall>(shape);
+}
+
+Vec3 smooth_support_M(const Shape& shape, const Vec3& d) {
+  if (const auto* e = std::get_if<Ellipsoid>(&shape)) {
+    // x = A^2 d / |A d| with A = diag(a) maximises d . x over x^T A^-2 x <= 1.
+    const Vec3 ad = e->semi_axes_M.cwiseProduct(d);
+    const double length = ad.norm();
+    if (!(length > 0.0)) return Vec3::Zero();
+    return e->semi_axes_M.cwiseProduct(ad) / length;
+  }
+  if (const auto* c = std::get_if<Cylinder>(&shape)) {
+    const double radial = std::hypot(d.x(), d.y());
+    const double z = d.z() > 0.0 ? c->half_height : (d.z() < 0.0 ? -c->half_height : 0.0);
+    if (!(radial > 0.0)) return Vec3(0.0, 0.0, z);
+    return Vec3(c->radius * d.x() / radial, c->radius * d.y() / radial, z);
+  }
+  if (const auto* c = std::get_if<Capsule>(&shape)) {
+    const double length = d.norm();
+    const double z = d.z() > 0.0 ? c->half_length : (d.z() < 0.0 ? -c->half_length : 0.0);
+    if (!(length > 0.0)) return Vec3(0.0, 0.0, z);
+    return Vec3(0.0, 0.0, z) + (c->radius / length) * d;
+  }
+  if (const auto* b = std::get_if<LoadedBall>(&shape)) {
+    const double length = d.norm();
+    if (!(length > 0.0)) return b->centre_M();
+    return b->centre_M() + (b->radius / length) * d;
+  }
+  PALPABLE_CHECK(false, "smooth_support_M needs a smooth convex shape");
+  return Vec3::Zero();
+}
+
 Compound make_compound(std::vector<CompoundPart> parts) {
   if (parts.empty()) throw InputError("parts", "a compound needs at least one part");
   for (std::size_t i = 0; i < parts.size(); ++i) {
     const std::string where = "parts/" + std::to_string(i);
     CompoundPart& part = parts[i];
     if (!part.shape) throw InputError(where, "has no shape");
-    if (!std::holds_alternative<Sphere>(*part.shape) &&
-        !std::holds_alternative<ConvexPolyhedron>(*part.shape)) {
-      throw InputError(where, "must be a sphere or a convex polyhedron (convex and bounded)");
+    if (std::holds_alternative<Halfspace>(*part.shape) ||
+        std::holds_alternative<Compound>(*part.shape)) {
+      throw InputError(where, "must be a convex bounded shape (not a halfspace or a compound)");
     }
     if (!is_finite(part.position_M)) throw InputError(where + "/position", "must be finite");
     const double norm = part.orientation_M.norm();
@@ -470,7 +542,9 @@ bool is_bounded(const Shape& shape) {
                      if (!part.shape || !is_bounded(*part.shape)) return false;
                    }
                    return true;
-                 }},
+                 },
+                 [](const Ellipsoid&) { return true; }, [](const Cylinder&) { return true; },
+                 [](const Capsule&) { return true; }, [](const LoadedBall&) { return true; }},
       shape);
 }
 
@@ -494,11 +568,16 @@ double compound_max_radius(const Compound& c) {
 }  // namespace
 
 double max_radius(const Shape& shape) {
-  return std::visit(Overloaded{[](const Sphere& s) { return s.radius; },
-                               [](const ConvexPolyhedron& p) { return p.max_radius(); },
-                               [](const Halfspace&) { return kInfinity; },
-                               [](const Compound& c) { return compound_max_radius(c); }},
-                    shape);
+  return std::visit(
+      Overloaded{[](const Sphere& s) { return s.radius; },
+                 [](const ConvexPolyhedron& p) { return p.max_radius(); },
+                 [](const Halfspace&) { return kInfinity; },
+                 [](const Compound& c) { return compound_max_radius(c); },
+                 [](const Ellipsoid& e) { return e.semi_axes_M.maxCoeff(); },
+                 [](const Cylinder& c) { return std::hypot(c.radius, c.half_height); },
+                 [](const Capsule& c) { return c.half_length + c.radius; },
+                 [](const LoadedBall& b) { return b.radius + std::abs(b.com_offset); }},
+      shape);
 }
 
 Vec3 support_W(const Shape& shape, const Vec3& p_W, const Quat& q_WM, const Vec3& direction_W) {
@@ -510,7 +589,10 @@ Vec3 support_W(const Shape& shape, const Vec3& p_W, const Quat& q_WM, const Vec3
   if (const auto* poly = std::get_if<ConvexPolyhedron>(&shape)) {
     return p_W + q_WM * poly->support(q_WM.conjugate() * direction_W);
   }
-  PALPABLE_CHECK(false, "support_W needs a sphere or a convex polyhedron");
+  if (is_smooth_convex(shape)) {
+    return p_W + q_WM * smooth_support_M(shape, q_WM.conjugate() * direction_W);
+  }
+  PALPABLE_CHECK(false, "support_W needs a bounded convex shape");
   return p_W;
 }
 
@@ -543,6 +625,32 @@ Aabb bounding_box_W(const Shape& shape, const Vec3& p_W, const Quat& q_WM) {
         box.min_W[k] = offset_W / n_W[k];
       }
     }
+  } else if (const auto* e = std::get_if<Ellipsoid>(&shape)) {
+    // Exact: the support along world axis i reaches |R_i. diag(a)| (row i of R diag(a)).
+    const Mat3 RA = q_WM.toRotationMatrix() * e->semi_axes_M.asDiagonal();
+    const Vec3 half = RA.rowwise().norm();
+    box.min_W = p_W - half;
+    box.max_W = p_W + half;
+  } else if (const auto* c = std::get_if<Cylinder>(&shape)) {
+    // Exact: a disk of radius r with unit normal k spans r sqrt(1 - k_i^2) along axis i, and the
+    // two caps are h |k_i| either side of the centre.
+    const Vec3 k_W = q_WM * Vec3::UnitZ();
+    Vec3 half;
+    for (int i = 0; i < 3; ++i) {
+      half[i] = c->radius * std::sqrt(std::max(0.0, 1.0 - k_W[i] * k_W[i])) +
+                c->half_height * std::abs(k_W[i]);
+    }
+    box.min_W = p_W - half;
+    box.max_W = p_W + half;
+  } else if (const auto* c = std::get_if<Capsule>(&shape)) {
+    const Vec3 half =
+        c->half_length * (q_WM * Vec3::UnitZ()).cwiseAbs() + Vec3::Constant(c->radius);
+    box.min_W = p_W - half;
+    box.max_W = p_W + half;
+  } else if (const auto* b = std::get_if<LoadedBall>(&shape)) {
+    const Vec3 centre_W = p_W + q_WM * b->centre_M();
+    box.min_W = centre_W - Vec3::Constant(b->radius);
+    box.max_W = centre_W + Vec3::Constant(b->radius);
   } else {
     const auto& compound = std::get<Compound>(shape);
     for (const CompoundPart& part : compound.parts) {

@@ -16,6 +16,38 @@ struct Sphere {
   double radius = 0.0;  // [m] > 0
 };
 
+// Smooth convex shapes (issue 16), each centred so that the modelling frame's origin is the centre
+// of mass. Build them with the validated make_* functions below.
+
+// The solid { x : sum (x_i / a_i)^2 <= 1 }, semi-axes a = semi_axes_M along M's axes [m].
+struct Ellipsoid {
+  Vec3 semi_axes_M = Vec3::Ones();
+};
+
+// A round cylinder, axis along M's z: { x : x^2 + y^2 <= radius^2, |z| <= half_height }. A disk or
+// coin when thin; its two rims are sharp circles.
+struct Cylinder {
+  double radius = 0.0;       // [m] > 0
+  double half_height = 0.0;  // [m] > 0
+};
+
+// The points within `radius` of the segment from -half_length to +half_length along M's z.
+struct Capsule {
+  double radius = 0.0;       // [m] > 0
+  double half_length = 0.0;  // [m] > 0 (0 would be a sphere: use Sphere)
+};
+
+// A sphere whose centre of mass is not at its centre (the tippe top's textbook model): the ball of
+// `radius` centred at centre_M() = (0, 0, -com_offset), so the centre of mass (M's origin) lies
+// com_offset along +z from the geometric centre; |com_offset| < radius. Uniform density cannot
+// put the centre of mass there, so its mass and inertia are given (mass_properties_from_inertia;
+// a scene gives "mass" and "inertia").
+struct LoadedBall {
+  double radius = 0.0;      // [m] > 0
+  double com_offset = 0.0;  // [m], |com_offset| < radius
+  Vec3 centre_M() const { return Vec3(0.0, 0.0, -com_offset); }
+};
+
 // The infinite solid { x : normal_M . x <= offset }. Only for fixed or kinematic bodies.
 struct Halfspace {
   Vec3 normal_M = Vec3::UnitZ();  // unit outward normal
@@ -43,8 +75,8 @@ class ConvexPolyhedron {
  public:
   // The convex hull of `points` (at least 4 not coplanar), via Qhull, coplanar facets merged.
   // `coplanar_tolerance` [m]: facets whose planes agree within it are merged into one face;
-  // negative: kHullCoplanarTolerance (core/settings.hpp) times the points' bounding-box diagonal; zero:
-  // Qhull's own merging only. Interior and duplicate points are dropped; vertices within the
+  // negative: kHullCoplanarTolerance (core/settings.hpp) times the points' bounding-box diagonal;
+  // zero: Qhull's own merging only. Interior and duplicate points are dropped; vertices within the
   // tolerance of an edge or face are not corners and are dropped too. Throws InputError for
   // fewer than 4 points, non-finite coordinates, identical, collinear or coplanar points.
   // The vertices are shifted so that the centre of mass of the solid (uniform density) is at the
@@ -99,6 +131,12 @@ std::string polyhedron_defect(const ConvexPolyhedron& polyhedron, double toleran
 // offset. Throw InputError naming the argument.
 Sphere make_sphere(double radius);
 Halfspace make_halfspace(const Vec3& normal_M, double offset);
+// Positive finite semi-axes / radius / half-height / half-length, and |com_offset| < radius.
+// Throw InputError naming the argument.
+Ellipsoid make_ellipsoid(const Vec3& semi_axes_M);
+Cylinder make_cylinder(double radius, double half_height);
+Capsule make_capsule(double radius, double half_length);
+LoadedBall make_loaded_ball(double radius, double com_offset);
 
 struct CompoundPart;
 
@@ -108,18 +146,26 @@ struct Compound {
   std::vector<CompoundPart> parts;
 };
 
-using Shape = std::variant<Sphere, ConvexPolyhedron, Halfspace, Compound>;
+using Shape = std::variant<Sphere, ConvexPolyhedron, Halfspace, Compound, Ellipsoid, Cylinder,
+                           Capsule, LoadedBall>;
+
+// True for the smooth convex shapes above (Ellipsoid, Cylinder, Capsule, LoadedBall): bounded,
+// convex, described by their support function rather than a mesh.
+bool is_smooth_convex(const Shape& shape);
+// The support point of a smooth convex shape in M: a point of the shape maximising
+// direction_M . x (exact, closed form). A zero direction gives a point of the shape.
+Vec3 smooth_support_M(const Shape& shape, const Vec3& direction_M);
 
 // A convex piece of a compound, posed in the compound's modelling frame.
 struct CompoundPart {
-  std::shared_ptr<const Shape> shape;  // a Sphere or ConvexPolyhedron
+  std::shared_ptr<const Shape> shape;  // bounded and convex: not a Halfspace or Compound
   Vec3 position_M = Vec3::Zero();
   Quat orientation_M = Quat::Identity();
 };
 
-// A compound from its parts, validated: at least one part, each a Sphere or ConvexPolyhedron
-// (convex and bounded), a finite position and a unit (within 1e-9) orientation, which is
-// normalised. Throws InputError naming the part.
+// A compound from its parts, validated: at least one part, each a bounded convex shape (a Sphere,
+// ConvexPolyhedron or one of the smooth shapes above), a finite position and a unit (within 1e-9)
+// orientation, which is normalised. Throws InputError naming the part.
 Compound make_compound(std::vector<CompoundPart> parts);
 
 // True for shapes a dynamic body may have (finite volume).

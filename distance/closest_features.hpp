@@ -2,7 +2,9 @@
 // Closest features between two posed shapes (DESIGN.md §3): V-Clip for polyhedron pairs, the
 // same V-Clip states with a one-point "polyhedron" for a sphere's centre against a polyhedron,
 // closed forms for sphere-sphere and halfspace-sphere, a support-vertex walk for
-// halfspace-polyhedron, and compounds piece by piece (minimum over pieces).
+// halfspace-polyhedron, the closed-form support point for halfspace against a smooth shape
+// (ellipsoid, cylinder, capsule), GJK (distance/gjk.hpp) for a smooth shape against anything else,
+// and compounds piece by piece (minimum over pieces).
 //
 // Sign convention (used everywhere): the pair is (body 1, body 2) and n_W points from body 2 to
 // body 1; p1_W - p2_W = distance * n_W when separated.
@@ -36,12 +38,17 @@ struct Pose {
 // and shared by every body and query using it.
 class ShapeGeometry {
  public:
-  enum class PieceKind : std::uint8_t { kSphere, kPolyhedron, kHalfspace };
-  // One convex piece, posed in the shape's frame M (identity for a non-compound shape).
+  // kSmooth: an ellipsoid, cylinder or capsule (a loaded ball is a kSphere piece posed at its
+  // geometric centre), paired by GJK on support mappings (distance/gjk.hpp).
+  enum class PieceKind : std::uint8_t { kSphere, kPolyhedron, kHalfspace, kSmooth };
+  // One convex piece, posed in the shape's frame M (identity for a non-compound shape). Each
+  // piece is a core (a point, a polyhedron, a segment, an ellipsoid or cylinder) inflated by
+  // `radius`.
   struct Piece {
     PieceKind kind = PieceKind::kSphere;
     const FeatureMesh* mesh = nullptr;  // the polyhedron, or a single point for a sphere
-    double radius = 0.0;                // sphere radius [m], 0 otherwise
+    const Shape* smooth = nullptr;      // kSmooth: the Ellipsoid, Cylinder or Capsule
+    double radius = 0.0;                // sphere or capsule radius [m], 0 otherwise
     Vec3 normal_M = Vec3::UnitZ();      // halfspace {x : normal . x <= offset}, in M
     double offset = 0.0;
     Vec3 p_M = Vec3::Zero();  // piece frame in M
@@ -56,8 +63,9 @@ class ShapeGeometry {
   const Shape& shape() const { return *shape_; }
   const std::vector<Piece>& pieces() const { return pieces_; }
   // The largest distance from the origin of M that rotation about it can move a surface point
-  // through [m]: 0 for a sphere centred at the origin (its surface maps onto itself), the maximum
-  // radius otherwise; +inf with a halfspace piece.
+  // through [m]: 0 for a sphere centred at the origin (its surface maps onto itself), the distance
+  // of its centre for a loaded ball (the same argument about the centre), the maximum radius
+  // otherwise; +inf with a halfspace piece.
   double rotation_radius() const { return rotation_radius_; }
   // The largest distance from the origin of M to any point of the shape [m] (+inf: halfspace).
   double reach() const { return reach_; }

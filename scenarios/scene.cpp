@@ -79,6 +79,51 @@ std::shared_ptr<const Shape> parse_shape(const Reader& r, const json& value,
       return std::make_shared<const Shape>(
           ConvexPolyhedron::prism(radius, half_height, sides.get<int>()));
     }
+    // A positive size [m] within kSizeRange, and at least kMinAspect of `largest` (0: no check).
+    auto size = [&](const char* key, double largest) {
+      const double x = r.positive(r.required(value, path, key), path + "/" + key);
+      if (x < kMinSize || x > kMaxSize || x < kMinAspect * largest) {
+        r.fail_value(path + "/" + key, value[key],
+                     std::string(kSizeRange) + ", and at least 1e-6 of the largest");
+      }
+      return x;
+    };
+    if (type == "ellipsoid") {
+      r.only_keys(value, path, {"type", "semi_axes"});
+      const Vec3 a = r.vec3(r.required(value, path, "semi_axes"), path + "/semi_axes");
+      for (int i = 0; i < 3; ++i) {
+        if (!(a[i] >= kMinSize && a[i] <= kMaxSize && a[i] >= kMinAspect * a.maxCoeff())) {
+          r.fail_value(path + "/semi_axes/" + std::to_string(i), value["semi_axes"][i],
+                       std::string("a positive semi-axis, ") + kSizeRange +
+                           ", and at least 1e-6 of the largest");
+        }
+      }
+      return std::make_shared<const Shape>(make_ellipsoid(a));
+    }
+    if (type == "cylinder") {
+      r.only_keys(value, path, {"type", "radius", "half_height"});
+      const double radius = size("radius", 0.0);
+      const double half_height = size("half_height", radius);
+      if (radius < kMinAspect * half_height) size("radius", half_height);
+      return std::make_shared<const Shape>(make_cylinder(radius, half_height));
+    }
+    if (type == "capsule") {
+      r.only_keys(value, path, {"type", "radius", "half_length"});
+      const double radius = size("radius", 0.0);
+      const double half_length = size("half_length", radius);
+      if (radius < kMinAspect * half_length) size("radius", half_length);
+      return std::make_shared<const Shape>(make_capsule(radius, half_length));
+    }
+    if (type == "loaded_ball") {
+      r.only_keys(value, path, {"type", "radius", "com_offset"});
+      const double radius = size("radius", 0.0);
+      const double offset = r.number(r.required(value, path, "com_offset"), path + "/com_offset");
+      if (!(std::abs(offset) < radius)) {
+        r.fail_value(path + "/com_offset", value["com_offset"],
+                     "an offset of the centre of mass smaller in size than the radius");
+      }
+      return std::make_shared<const Shape>(make_loaded_ball(radius, offset));
+    }
     if (type == "convex") {
       r.only_keys(value, path, {"type", "vertices"});
       const json& vertices = r.required(value, path, "vertices");
@@ -122,9 +167,11 @@ std::shared_ptr<const Shape> parse_shape(const Reader& r, const json& value,
             r.object(r.required(parts[i], part_path, "shape"), part_path + "/shape");
         const json& part_type = r.required(part_shape, part_path + "/shape", "type");
         if (part_type != "sphere" && part_type != "box" && part_type != "prism" &&
-            part_type != "convex") {
+            part_type != "convex" && part_type != "ellipsoid" && part_type != "cylinder" &&
+            part_type != "capsule") {
           r.fail_value(part_path + "/shape/type", part_type,
-                       "a convex part: \"sphere\", \"box\", \"prism\" or \"convex\"");
+                       "a convex part: \"sphere\", \"box\", \"prism\", \"convex\", "
+                       "\"ellipsoid\", \"cylinder\" or \"capsule\"");
         }
         part.shape = parse_shape(r, part_shape, part_path + "/shape", /*allow_unbounded=*/false);
         if (parts[i].contains("position")) {
@@ -148,7 +195,8 @@ std::shared_ptr<const Shape> parse_shape(const Reader& r, const json& value,
     r.fail(path, e.what());
   }
   r.fail_value(path + "/type", value["type"],
-               "one of \"sphere\", \"box\", \"prism\", \"convex\", \"halfspace\", \"compound\"");
+               "one of \"sphere\", \"box\", \"prism\", \"convex\", \"ellipsoid\", "
+               "\"cylinder\", \"capsule\", \"loaded_ball\", \"halfspace\", \"compound\"");
 }
 
 Material parse_material(const Reader& r, const json& value, const std::string& path,
@@ -212,8 +260,8 @@ void parse_settings(const Reader& r, const json& value, const std::string& path,
 Body parse_body(const Reader& r, const json& value, const std::string& path) {
   r.object(value, path);
   r.only_keys(value, path,
-              {"name", "motion", "mass", "density", "shape", "position", "orientation", "velocity",
-               "angular_velocity"});
+              {"name", "motion", "mass", "density", "inertia", "shape", "position", "orientation",
+               "velocity", "angular_velocity"});
   Body body;
   body.name = r.string(r.required(value, path, "name"), path + "/name");
   if (body.name.empty()) r.fail_value(path + "/name", value["name"], "a non-empty name");
@@ -251,7 +299,30 @@ Body parse_body(const Reader& r, const json& value, const std::string& path) {
       r.fail(path, has_mass ? "give either \"mass\" or \"density\", not both"
                             : "missing \"mass\" (kg) or \"density\" (kg/m^3) of a dynamic body");
     }
-    if (has_mass) {
+    const bool loaded = std::holds_alternative<LoadedBall>(*body.shape);
+    if (loaded != value.contains("inertia")) {
+      r.fail(path, loaded ? "a loaded ball needs \"mass\" (kg) and \"inertia\" (its principal "
+                            "moments about its centre of mass along x, y, z, kg m^2): uniform "
+                            "density cannot put its centre of mass off its centre"
+                          : "\"inertia\" is for a loaded ball only; other shapes' inertia comes "
+                            "from their shape and mass or density");
+    }
+    if (loaded) {
+      if (!has_mass) r.fail(path, "a loaded ball needs \"mass\", not \"density\"");
+      const double mass = r.positive(value["mass"], path + "/mass");
+      const Vec3 I = r.vec3(value["inertia"], path + "/inertia");
+      for (int i = 0; i < 3; ++i) {
+        if (!(I[i] > 0.0)) {
+          r.fail_value(path + "/inertia/" + std::to_string(i), value["inertia"][i],
+                       "a positive principal moment");
+        }
+      }
+      try {
+        body.mass = mass_properties_from_inertia(mass, I.asDiagonal());
+      } catch (const InputError& e) {
+        r.fail_value(path + "/inertia", value["inertia"], e.what());
+      }
+    } else if (has_mass) {
       body.mass = mass_properties_from_mass(*body.shape, r.positive(value["mass"], path + "/mass"));
     } else {
       body.mass = mass_properties_from_density(*body.shape,

@@ -168,12 +168,27 @@ void closest_core_points(const std::vector<Vec3>& m, const std::vector<Vec3>& s,
   }
 }
 
+// Whether a body touches with a curved surface along a point or a line: a smooth piece
+// (ellipsoid, cylinder, capsule) other than a cylinder's flat cap, or a loaded ball. Rolling moves
+// such a contact over the body's surface, which a held link — material points of the mover, a
+// fixed feature of the support — cannot follow; the contact stays a train of microcollisions.
+bool curved_contact(const ShapeGeometry& g, int piece, const std::vector<Vec3>& feature) {
+  if (piece < 0 || piece >= static_cast<int>(g.pieces().size())) return false;
+  const bool curved = g.pieces()[piece].kind == ShapeGeometry::PieceKind::kSmooth ||
+                      std::holds_alternative<LoadedBall>(g.shape());
+  return curved && feature.size() < 3;
+}
+
 }  // namespace
 
 std::optional<HeldLink> make_held_link(std::uint32_t pair, BodyId a, BodyId b,
                                        const LinkSide& side_a, const LinkSide& side_b,
                                        const DistanceResult& closest,
                                        const ContactGeometry& geometry) {
+  if (curved_contact(side_a.geometry, closest.piece1, geometry.feature1) ||
+      curved_contact(side_b.geometry, closest.piece2, geometry.feature2)) {
+    return std::nullopt;
+  }
   const bool plane1 = geometry.unbounded1 || geometry.feature1.size() >= 3;
   const bool plane2 = geometry.unbounded2 || geometry.feature2.size() >= 3;
   if (!plane1 && !plane2) return point_pair_link(pair, a, b, side_a, side_b, closest, geometry);

@@ -74,7 +74,10 @@ struct LinkSide {
 // The link of a pair to be held, from the query at its collision: which body owns the plane (a
 // face or a halfspace facing the other body), and the other's contact feature; where neither side
 // offers a plane, the two features of a point contact. nullopt for two parallel edges without a
-// plane (held by neither rule: they stay collisions).
+// plane (held by neither rule: they stay collisions), and for a curved surface touching along a
+// point or a line (a smooth shape other than a cylinder's flat cap, a loaded ball): rolling moves
+// that contact over the surface, which material points cannot follow, so it stays a train of
+// microcollisions.
 std::optional<HeldLink> make_held_link(std::uint32_t pair, BodyId a, BodyId b,
                                        const LinkSide& side_a, const LinkSide& side_b,
                                        const DistanceResult& closest,

@@ -35,7 +35,8 @@ json vec(const Vec3& v) {
   return json::array({v.x(), v.y(), v.z()});
 }
 
-// A shape as the page draws it: spheres, triangle meshes (polyhedra), planes, groups.
+// A shape as the page draws it: spheres, triangle meshes (polyhedra, and the smooth shapes
+// tessellated), planes, groups.
 json shape_json(const Shape& shape) {
   if (const Sphere* s = std::get_if<Sphere>(&shape))
     return {{"type", "sphere"}, {"radius", s->radius}};
@@ -55,6 +56,36 @@ json shape_json(const Shape& shape) {
       } while (h != f.half_edge && loop.size() < he.size());
       for (std::size_t k = 1; k + 1 < loop.size(); ++k) {
         triangles.push_back({loop[0], loop[k], loop[k + 1]});
+      }
+    }
+    return {{"type", "mesh"}, {"vertices", vertices}, {"triangles", triangles}};
+  }
+  if (is_smooth_convex(shape)) {
+    // A latitude-longitude grid of directions (no ring on the equator) mapped to the support
+    // points: exact surface points, and the cylinder's flat caps and wall and the capsule's wall
+    // come out of the triangles between the last northern and the first southern ring.
+    constexpr int kRings = 24, kPerRing = 48;
+    constexpr double kPi = 3.14159265358979323846;
+    json vertices = json::array(), triangles = json::array();
+    vertices.push_back(vec(smooth_support_M(shape, Vec3::UnitZ())));
+    for (int i = 0; i < kRings; ++i) {
+      const double theta = kPi * (i + 0.5) / kRings;
+      for (int j = 0; j < kPerRing; ++j) {
+        const double phi = 2.0 * kPi * j / kPerRing;
+        const Vec3 d(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi),
+                     std::cos(theta));
+        vertices.push_back(vec(smooth_support_M(shape, d)));
+      }
+    }
+    const int south = 1 + kRings * kPerRing;
+    vertices.push_back(vec(smooth_support_M(shape, -Vec3::UnitZ())));
+    auto at = [](int ring, int j) { return 1 + ring * kPerRing + (j % kPerRing); };
+    for (int j = 0; j < kPerRing; ++j) {
+      triangles.push_back({0, at(0, j), at(0, j + 1)});
+      triangles.push_back({south, at(kRings - 1, j + 1), at(kRings - 1, j)});
+      for (int i = 0; i + 1 < kRings; ++i) {
+        triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+        triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
       }
     }
     return {{"type", "mesh"}, {"vertices", vertices}, {"triangles", triangles}};

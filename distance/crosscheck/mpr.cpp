@@ -29,6 +29,9 @@ Vec3 MprShape::support_W(const Vec3& direction_W) const {
     const double norm = direction_W.norm();
     return norm > 0.0 ? Vec3(x_W_ + (piece_->radius / norm) * direction_W) : x_W_;
   }
+  if (piece_->kind == ShapeGeometry::PieceKind::kSmooth) {
+    return x_W_ + R_W_ * smooth_support_M(*piece_->smooth, R_W_.transpose() * direction_W);
+  }
   const FeatureMesh& mesh = *piece_->mesh;
   const Vec3 d_M = R_W_.transpose() * direction_W;
   int v = last_vertex_;

@@ -7,9 +7,9 @@
 // recover along it with care.
 //
 // Supports: a sphere's centre plus its radius; a polyhedron's vertex by a hill-climbing walk
-// over the vertex graph started at the last answer (the usual fast support for hulls). A
-// halfspace has no support point and is not accepted (its penetration depth is exact in
-// DistanceResult).
+// over the vertex graph started at the last answer (the usual fast support for hulls); a smooth
+// shape's closed-form support. A halfspace has no support point and is not accepted (its
+// penetration depth is exact in DistanceResult).
 #include "core/types.hpp"
 #include "distance/closest_features.hpp"
 

@@ -440,3 +440,112 @@ TEST_CASE("Mass properties reject bad input") {
   CHECK(fixed.mass == kInfinity);
   CHECK(fixed.inv_inertia_M() == Mat3::Zero());
 }
+
+namespace {
+
+// Points on the surface of a smooth shape on a latitude-longitude grid: `rings` latitudes of
+// `per_ring` points each on the unit sphere, mapped by `map` (a point of the unit sphere to the
+// shape's surface). Their hull is inscribed in the (convex) shape.
+std::vector<Vec3> surface_grid(int rings, int per_ring,
+                               const std::function<Vec3(const Vec3&)>& map) {
+  std::vector<Vec3> points{map(Vec3::UnitZ()), map(-Vec3::UnitZ())};
+  for (int i = 1; i < rings; ++i) {
+    const double theta = kPi * i / rings;
+    for (int j = 0; j < per_ring; ++j) {
+      const double phi = 2.0 * kPi * (j + 0.5 * (i % 2)) / per_ring;
+      points.push_back(map(
+          Vec3(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta))));
+    }
+  }
+  return points;
+}
+
+// The closed form against the hull of a dense grid of surface points. The hull is inscribed, so
+// its volume and its moments about the (common, by symmetry) centre are below the closed form's,
+// and they converge to it as the grid refines: the closed form must lie in [hull, hull (1 + gap)].
+void check_against_inscribed_hull(const Shape& shape, const std::vector<Vec3>& points, double gap) {
+  const VolumeIntegrals exact = shape_volume_integrals(shape);
+  const VolumeIntegrals hull = volume_integrals(ConvexPolyhedron::from_points(points, 0.0));
+  CAPTURE(exact.volume, hull.volume);
+  CHECK(exact.centroid.norm() == 0.0);
+  CHECK(hull.volume <= exact.volume);
+  CHECK(exact.volume <= hull.volume * (1.0 + gap));
+  for (int i = 0; i < 3; ++i) {
+    CAPTURE(i, exact.inertia_about_centroid(i, i), hull.inertia_about_centroid(i, i));
+    CHECK(hull.inertia_about_centroid(i, i) <= exact.inertia_about_centroid(i, i));
+    CHECK(exact.inertia_about_centroid(i, i) <= hull.inertia_about_centroid(i, i) * (1.0 + gap));
+    for (int j = 0; j < 3; ++j) {
+      if (j != i) CHECK(exact.inertia_about_centroid(i, j) == 0.0);
+    }
+  }
+}
+
+}  // namespace
+
+TEST_CASE("Smooth shapes: closed-form mass properties against inscribed hulls") {
+  // A 120 x 240 grid: the hull's deficit is about (pi / 120)^2 / 2 ~ 3.4e-4 of the volume.
+  const int rings = 120, per_ring = 240;
+  const double gap = 1.5e-3;
+  SECTION("ellipsoid") {
+    const Vec3 a(0.3, 0.5, 0.7);
+    const Shape e = make_ellipsoid(a);
+    check_against_inscribed_hull(
+        e, surface_grid(rings, per_ring, [&](const Vec3& u) { return Vec3(a.cwiseProduct(u)); }),
+        gap);
+    // The sphere as an ellipsoid with equal semi-axes: to rounding.
+    const VolumeIntegrals round =
+        shape_volume_integrals(Shape(make_ellipsoid(Vec3::Constant(0.4))));
+    const VolumeIntegrals sphere = shape_volume_integrals(Shape(make_sphere(0.4)));
+    CHECK(round.volume == Approx(sphere.volume).epsilon(1e-15));
+    CHECK(relative_error(round.inertia_about_centroid, sphere.inertia_about_centroid) < 1e-15);
+  }
+  SECTION("cylinder") {
+    const double r = 0.4, h = 0.15;
+    std::vector<Vec3> points;
+    for (int j = 0; j < 4 * per_ring; ++j) {
+      const double phi = 2.0 * kPi * j / (4 * per_ring);
+      points.emplace_back(r * std::cos(phi), r * std::sin(phi), h);
+      points.emplace_back(r * std::cos(phi), r * std::sin(phi), -h);
+    }
+    check_against_inscribed_hull(Shape(make_cylinder(r, h)), points, 1e-4);
+    // And the exact regular prism of 4096 sides: with t = 2 pi / n its volume falls short of the
+    // cylinder's by t^2/6 and its axial moment by t^2/3 (series of n sin t (2 + cos t) / (6 pi)),
+    // to O(t^4); the transverse moment mixes the two.
+    const int n = 4096;
+    const double t = 2 * kPi / n;
+    const PrismExact prism = prism_exact(r, h, n);
+    const VolumeIntegrals c = shape_volume_integrals(Shape(make_cylinder(r, h)));
+    CHECK((c.volume - prism.volume) / c.volume / (t * t / 6) == Approx(1.0).epsilon(1e-5));
+    CHECK((c.inertia_about_centroid(2, 2) - prism.axial) / c.inertia_about_centroid(2, 2) /
+              (t * t / 3) ==
+          Approx(1.0).epsilon(1e-5));
+    const double transverse_deficit =
+        (c.inertia_about_centroid(0, 0) - prism.transverse) / c.inertia_about_centroid(0, 0);
+    CHECK(transverse_deficit >= t * t / 6 * (1 - 1e-5));
+    CHECK(transverse_deficit <= t * t / 3 * (1 + 1e-5));
+  }
+  SECTION("capsule") {
+    const double r = 0.2, h = 0.35;
+    // Each hemisphere's grid, shifted to its end of the segment; the equator rings bound the
+    // cylinder.
+    auto map = [&](const Vec3& u) { return Vec3(r * u + Vec3(0, 0, u.z() >= 0 ? h : -h)); };
+    std::vector<Vec3> points = surface_grid(rings, per_ring, map);
+    for (int j = 0; j < per_ring; ++j) {
+      const double phi = 2.0 * kPi * j / per_ring;
+      points.emplace_back(r * std::cos(phi), r * std::sin(phi), h);
+      points.emplace_back(r * std::cos(phi), r * std::sin(phi), -h);
+    }
+    check_against_inscribed_hull(Shape(make_capsule(r, h)), points, gap);
+  }
+  SECTION("a loaded ball has no uniform-density mass properties") {
+    const Shape ball = make_loaded_ball(0.1, 0.02);
+    CHECK_THAT(input_error([&] { mass_properties_from_density(ball, 1000.0); }),
+               Catch::Contains("loaded ball"));
+    CHECK_THAT(input_error([&] { mass_properties_from_mass(ball, 1.0); }),
+               Catch::Contains("loaded ball"));
+    // Given explicitly (the scene's "mass" and "inertia"), it is an ordinary rigid body.
+    const MassProperties m =
+        mass_properties_from_inertia(1.0, Vec3(0.004, 0.004, 0.0035).asDiagonal());
+    CHECK(m.principal_moments.x() == 0.0035);
+  }
+}

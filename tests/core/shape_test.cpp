@@ -7,6 +7,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -180,7 +181,7 @@ TEST_CASE("Compounds: validated parts, union bounding box, radius") {
   CHECK_THAT(input_error([&] {
                make_compound({{plane, Vec3::Zero(), Quat::Identity()}});
              }),
-             Contains("parts/0") && Contains("sphere or a convex polyhedron"));
+             Contains("parts/0") && Contains("convex bounded shape"));
   CHECK_THAT(input_error([&] { make_compound({}); }), Contains("at least one part"));
   CHECK_THAT(input_error([&] {
                make_compound({{nullptr, Vec3::Zero(), Quat::Identity()}});
@@ -233,4 +234,107 @@ TEST_CASE("from_faces validates orientation, closure and convexity") {
                ConvexPolyhedron::from_faces(v, {{0, 1, 2}, {0, 3, 1}, {0, 2, 3}, {1, 3, 2}}, 1e-12);
              }),
              Contains("outside"));
+}
+
+namespace {
+
+// Inside tests of the smooth shapes (in M), independent of their support functions.
+double smooth_excess(const Shape& shape, const Vec3& x) {
+  if (const auto* e = std::get_if<Ellipsoid>(&shape)) {
+    return x.cwiseQuotient(e->semi_axes_M).norm() - 1.0;  // relative
+  }
+  if (const auto* c = std::get_if<Cylinder>(&shape)) {
+    return std::max(std::hypot(x.x(), x.y()) - c->radius, std::abs(x.z()) - c->half_height);
+  }
+  if (const auto* c = std::get_if<Capsule>(&shape)) {
+    const double z = std::clamp(x.z(), -c->half_length, c->half_length);
+    return (x - Vec3(0, 0, z)).norm() - c->radius;
+  }
+  const auto& b = std::get<LoadedBall>(shape);
+  return (x - b.centre_M()).norm() - b.radius;
+}
+
+// Dense points of the smooth shape's surface (for brute-force maxima): surface points along rays
+// from the shape's centre, found by bisection on the inside test.
+std::vector<Vec3> smooth_surface_samples(const Shape& shape, int count, std::mt19937_64& rng) {
+  Vec3 centre = Vec3::Zero();
+  if (const auto* b = std::get_if<LoadedBall>(&shape)) centre = b->centre_M();
+  std::vector<Vec3> out;
+  for (int k = 0; k < count; ++k) {
+    const Vec3 u = random_unit(rng);
+    double lo = 0.0, hi = 2.0 * max_radius(shape);
+    for (int it = 0; it < 80; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      (smooth_excess(shape, centre + mid * u) <= 0.0 ? lo : hi) = mid;
+    }
+    out.push_back(centre + lo * u);
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("Smooth shapes: validated builders name the bad argument") {
+  CHECK_THAT(input_error([] { make_ellipsoid(Vec3(1, 0, 1)); }), Catch::Contains("semi_axes"));
+  CHECK_THAT(input_error([] { make_ellipsoid(Vec3(1, kInfinity, 1)); }),
+             Catch::Contains("semi_axes"));
+  CHECK_THAT(input_error([] { make_cylinder(-1.0, 1.0); }), Catch::Contains("radius"));
+  CHECK_THAT(input_error([] { make_cylinder(1.0, std::nan("")); }), Catch::Contains("half_height"));
+  CHECK_THAT(input_error([] { make_capsule(0.0, 1.0); }), Catch::Contains("radius"));
+  CHECK_THAT(input_error([] { make_capsule(1.0, -2.0); }), Catch::Contains("half_length"));
+  CHECK_THAT(input_error([] { make_loaded_ball(-1.0, 0.0); }), Catch::Contains("radius"));
+  CHECK_THAT(input_error([] { make_loaded_ball(1.0, 1.0); }), Catch::Contains("com_offset"));
+  CHECK_THAT(input_error([] { make_loaded_ball(1.0, -1.5); }), Catch::Contains("com_offset"));
+  CHECK(input_error([] { make_loaded_ball(1.0, -0.5); }) == "accepted");
+  // Smooth shapes may be compound parts.
+  CompoundPart part;
+  part.shape = std::make_shared<const Shape>(make_cylinder(1.0, 0.1));
+  CHECK(input_error([&] { make_compound({part}); }) == "accepted");
+}
+
+TEST_CASE("Smooth shapes: exact support, radius and tight world box against brute force") {
+  std::mt19937_64 rng(1601);
+  const std::vector<Shape> shapes = {make_ellipsoid(Vec3(0.3, 0.5, 0.7)), make_cylinder(0.4, 0.05),
+                                     make_capsule(0.2, 0.35), make_loaded_ball(0.25, 0.07)};
+  for (std::size_t s = 0; s < shapes.size(); ++s) {
+    CAPTURE(s);
+    const Shape& shape = shapes[s];
+    CHECK(is_bounded(shape));
+    CHECK(is_smooth_convex(shape));
+    const std::vector<Vec3> samples = smooth_surface_samples(shape, 20000, rng);
+    // The support point lies on the shape and no sample lies beyond it: exact, not an estimate.
+    for (int k = 0; k < 200; ++k) {
+      const Vec3 d = random_unit(rng);
+      const Vec3 p = smooth_support_M(shape, d);
+      CHECK(std::abs(smooth_excess(shape, p)) <= 1e-14);
+      double best = -kInfinity;
+      for (const Vec3& x : samples) best = std::max(best, d.dot(x));
+      CHECK(d.dot(p) >= best - 1e-12);
+    }
+    // Axis-aligned directions (a cylinder's flat cap, a capsule's pole): still on the shape.
+    for (int k = 0; k < 3; ++k) {
+      for (double sign : {-1.0, 1.0}) {
+        const Vec3 p = smooth_support_M(shape, sign * Vec3::Unit(k));
+        CHECK(std::abs(smooth_excess(shape, p)) <= 1e-14);
+      }
+    }
+    // The radius about the centre of mass bounds every point and is reached (within the
+    // samples' spacing).
+    double far = 0.0;
+    for (const Vec3& x : samples) far = std::max(far, x.norm());
+    CHECK(far <= max_radius(shape) * (1 + 1e-15));
+    CHECK(far >= max_radius(shape) * (1 - 2e-2));
+    // The world box is tight: its faces are the support points along the axes.
+    for (int trial = 0; trial < 10; ++trial) {
+      const Quat q = random_rotation(rng);
+      const Vec3 p(0.3, -1.0, 2.0);
+      const Aabb box = bounding_box_W(shape, p, q);
+      for (int k = 0; k < 3; ++k) {
+        CHECK(support_W(shape, p, q, Vec3::Unit(k))[k] == Approx(box.max_W[k]).margin(1e-14));
+        CHECK(support_W(shape, p, q, -Vec3::Unit(k))[k] == Approx(box.min_W[k]).margin(1e-14));
+      }
+    }
+  }
+  CHECK(max_radius(Shape(make_cylinder(0.4, 0.3))) == Approx(0.5).epsilon(1e-15));
+  CHECK(max_radius(Shape(make_loaded_ball(0.25, -0.07))) == Approx(0.32).epsilon(1e-15));
 }

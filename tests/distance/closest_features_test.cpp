@@ -8,6 +8,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cstdio>
 #include <cstdlib>
@@ -381,4 +382,305 @@ TEST_CASE("coherent queries allocate nothing", "[distance][alloc]") {
   counting = false;
   CHECK(sink > 0.0);
   CHECK(allocations.load() == 0);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Smooth shapes (ellipsoid, cylinder, capsule, loaded ball).
+
+namespace {
+
+// Signed excess of a world point over a posed shape's surface (0 on it, < 0 inside), from each
+// shape's own definition rather than its support function. An ellipsoid's is relative.
+double surface_excess(const Shape& shape, const Pose& pose, const Vec3& x_W) {
+  const Vec3 x = pose.q_WM.conjugate() * (x_W - pose.x_W);
+  if (const auto* s = std::get_if<Sphere>(&shape)) return x.norm() - s->radius;
+  if (const auto* e = std::get_if<Ellipsoid>(&shape)) {
+    return (x.cwiseQuotient(e->semi_axes_M).norm() - 1.0) * e->semi_axes_M.minCoeff();
+  }
+  if (const auto* c = std::get_if<Cylinder>(&shape)) {
+    return std::max(std::hypot(x.x(), x.y()) - c->radius, std::abs(x.z()) - c->half_height);
+  }
+  if (const auto* c = std::get_if<Capsule>(&shape)) {
+    const double z = std::clamp(x.z(), -c->half_length, c->half_length);
+    return (x - Vec3(0, 0, z)).norm() - c->radius;
+  }
+  if (const auto* b = std::get_if<LoadedBall>(&shape))
+    return (x - b->centre_M()).norm() - b->radius;
+  const auto& p = std::get<ConvexPolyhedron>(shape);
+  double m = -kInfinity;
+  for (const PolyFace& f : p.faces()) m = std::max(m, f.normal_M.dot(x) - f.offset);
+  return m;
+}
+
+// The separation of two posed convex shapes along unit u (from 2 to 1): min over body 1 of u . x
+// minus max over body 2 — a lower bound on their distance for every u, equal to it at the best u
+// (the separating-axis theorem).
+double separation(const TestShape& s1, const Pose& p1, const TestShape& s2, const Pose& p2,
+                  const Vec3& u) {
+  return u.dot(support_W(*s1.shape, p1.x_W, p1.q_WM, -u)) -
+         u.dot(support_W(*s2.shape, p2.x_W, p2.q_WM, u));
+}
+
+// Brute force: the best separation over 2000 random directions, then Nelder-Mead in the tangent
+// plane at each of the best 4 (the separation has narrow ridges on the sphere, along which a
+// compass or random search stalls; the simplex stretches along them), restarted until it stops
+// improving. A lower bound on the distance that approaches it.
+double brute_separation(const TestShape& s1, const Pose& p1, const TestShape& s2, const Pose& p2,
+                        std::mt19937_64& rng) {
+  std::normal_distribution<double> g(0.0, 1.0);
+  auto random_unit = [&] { return Vec3(g(rng), g(rng), g(rng)).normalized(); };
+  std::vector<std::pair<double, Vec3>> starts;
+  for (int k = 0; k < 2000; ++k) {
+    const Vec3 u = random_unit();
+    starts.emplace_back(separation(s1, p1, s2, p2, u), u);
+  }
+  std::partial_sort(starts.begin(), starts.begin() + 4, starts.end(),
+                    [](const auto& a, const auto& b) { return a.first > b.first; });
+  double overall = -kInfinity;
+  for (int start = 0; start < 4; ++start) {
+    auto [best, centre] = starts[start];
+    double size = 0.05;
+    for (int restart = 0; restart < 8; ++restart) {
+      const Vec3 t1 = centre.unitOrthogonal();
+      const Vec3 t2 = centre.cross(t1);
+      auto f = [&](const Eigen::Vector2d& x) {
+        return -separation(s1, p1, s2, p2, (centre + x.x() * t1 + x.y() * t2).normalized());
+      };
+      std::array<Eigen::Vector2d, 3> x = {Eigen::Vector2d(0, 0), Eigen::Vector2d(size, 0),
+                                          Eigen::Vector2d(0, size)};
+      std::array<double, 3> fx = {f(x[0]), f(x[1]), f(x[2])};
+      for (int it = 0; it < 3000; ++it) {
+        std::array<int, 3> o = {0, 1, 2};
+        std::sort(o.begin(), o.end(), [&](int a, int b) { return fx[a] < fx[b]; });
+        const int lo = o[0], mid = o[1], hi = o[2];
+        if ((x[hi] - x[lo]).norm() < 1e-13) break;
+        const Eigen::Vector2d c = 0.5 * (x[lo] + x[mid]);
+        const Eigen::Vector2d r = c + (c - x[hi]);
+        const double fr = f(r);
+        if (fr < fx[lo]) {
+          const Eigen::Vector2d e = c + 2.0 * (c - x[hi]);
+          const double fe = f(e);
+          if (fe < fr) {
+            x[hi] = e, fx[hi] = fe;
+          } else {
+            x[hi] = r, fx[hi] = fr;
+          }
+        } else if (fr < fx[mid]) {
+          x[hi] = r, fx[hi] = fr;
+        } else {
+          const Eigen::Vector2d k = c + 0.5 * (x[hi] - c);
+          const double fk = f(k);
+          if (fk < fx[hi]) {
+            x[hi] = k, fx[hi] = fk;
+          } else {
+            for (int i : {mid, hi}) x[i] = x[lo] + 0.5 * (x[i] - x[lo]), fx[i] = f(x[i]);
+          }
+        }
+      }
+      const int lo = static_cast<int>(std::min_element(fx.begin(), fx.end()) - fx.begin());
+      const double value = -fx[lo];
+      const Vec3 u = (centre + x[lo].x() * t1 + x[lo].y() * t2).normalized();
+      const bool improved = value > best + 1e-15;
+      if (value > best) best = value, centre = u;
+      if (!improved) break;
+      size = std::max(1e-6, 0.1 * size);
+    }
+    overall = std::max(overall, best);
+  }
+  return overall;
+}
+
+std::vector<TestShape> smooth_test_shapes() {
+  return {make_test_shape("ellipsoid", make_ellipsoid(Vec3(0.3, 0.5, 0.7))),
+          make_test_shape("disk", make_cylinder(0.4, 0.02)),
+          make_test_shape("cylinder", make_cylinder(0.3, 0.4)),
+          make_test_shape("capsule", make_capsule(0.2, 0.35)),
+          make_test_shape("loaded ball", make_loaded_ball(0.3, 0.1))};
+}
+
+}  // namespace
+
+TEST_CASE("smooth shapes: distance, closest points and normal against brute force",
+          "[distance][smooth]") {
+  std::mt19937_64 rng(1604);
+  const std::vector<TestShape> smooth = smooth_test_shapes();
+  std::vector<TestShape> others = smooth_test_shapes();
+  for (const TestShape& t : {cube(), tetrahedron(), hull1280(), coin(), sliver(), ball()}) {
+    others.push_back(t);
+  }
+  long separated = 0, penetrating = 0;
+  double worst_gap = 0.0, worst_point = 0.0, worst_brute = 0.0;
+  for (const TestShape& s1 : smooth) {
+    for (const TestShape& s2 : others) {
+      for (int trial = 0; trial < 24; ++trial) {
+        Pose p1 = random_pose(rng, 0.8), p2 = random_pose(rng, 0.8);
+        const bool swap = trial % 2 == 1;  // the smooth shape as body 1, then as body 2
+        const TestShape& a = swap ? s2 : s1;
+        const TestShape& b = swap ? s1 : s2;
+        CAPTURE(a.name, b.name, trial);
+        PairCache cache;
+        const DistanceResult r = closest_features(*a.geometry, p1, *b.geometry, p2, cache, 1000);
+        REQUIRE(r.status != ContactStatus::kFailed);
+        const double brute = brute_separation(a, p1, b, p2, rng);
+        CAPTURE(r.distance, brute);
+        if (r.status == ContactStatus::kPenetrating) {
+          ++penetrating;
+          // Overlapping: no direction separates them.
+          CHECK(brute <= 1e-9);
+          continue;
+        }
+        ++separated;
+        // The closest points lie on the surfaces, the distance between them, along n.
+        const double scale = 1.0;
+        CHECK(std::abs(surface_excess(*a.shape, p1, r.p1_W)) <= 1e-12 * scale);
+        CHECK(std::abs(surface_excess(*b.shape, p2, r.p2_W)) <= 1e-12 * scale);
+        CHECK((r.p1_W - r.p2_W - r.distance * r.n_W).norm() <= 1e-12);
+        CHECK(r.n_W.norm() == Approx(1.0).epsilon(1e-14));
+        // n is a separating axis that certifies the distance (the lower bound along it equals
+        // it), and brute force finds no better axis.
+        const double along_n = separation(a, p1, b, p2, r.n_W);
+        CHECK(r.distance - along_n <= 1e-11);
+        CHECK(brute <= r.distance + 1e-11);
+        CHECK(r.distance - brute <= 1e-12);
+        worst_brute = std::max(worst_brute, std::abs(r.distance - brute));
+        worst_gap = std::max(worst_gap, r.distance - along_n);
+        worst_point = std::max({worst_point, std::abs(surface_excess(*a.shape, p1, r.p1_W)),
+                                std::abs(surface_excess(*b.shape, p2, r.p2_W))});
+        // Moved together past contact along n, they penetrate.
+        p1.x_W -= (r.distance + 1e-3) * r.n_W;
+        PairCache fresh;
+        const DistanceResult over = closest_features(*a.geometry, p1, *b.geometry, p2, fresh, 1000);
+        CHECK(over.status == ContactStatus::kPenetrating);
+      }
+    }
+  }
+  INFO("separated " << separated << ", penetrating " << penetrating << ", worst certificate gap "
+                    << worst_gap << " m, worst surface excess " << worst_point << " m");
+  CHECK(separated > 200);
+  CHECK(penetrating > 50);
+  WARN("smooth pairs: separated " << separated << ", penetrating " << penetrating
+                                  << ", worst certificate gap " << worst_gap
+                                  << " m, worst surface excess " << worst_point
+                                  << " m, worst disagreement with brute force " << worst_brute
+                                  << " m");
+}
+
+TEST_CASE("smooth shapes against a halfspace: closed form, either order", "[distance][smooth]") {
+  std::mt19937_64 rng(1605);
+  const TestShape ground = make_test_shape("ground", make_halfspace(Vec3::UnitZ(), 0.0));
+  for (const TestShape& s : smooth_test_shapes()) {
+    for (int trial = 0; trial < 200; ++trial) {
+      CAPTURE(s.name, trial);
+      Pose p = random_pose(rng, 1.0);
+      // The lowest point by the definition of each shape, sampled densely: the support point must
+      // be at least as low, and on the surface.
+      const Vec3 low = support_W(*s.shape, p.x_W, p.q_WM, -Vec3::UnitZ());
+      const double exact = low.z();
+      for (bool swap : {false, true}) {
+        PairCache cache;
+        const DistanceResult r =
+            swap ? closest_features(*ground.geometry, Pose{}, *s.geometry, p, cache, 100)
+                 : closest_features(*s.geometry, p, *ground.geometry, Pose{}, cache, 100);
+        const Vec3 n_expected = swap ? Vec3(-Vec3::UnitZ()) : Vec3(Vec3::UnitZ());
+        if (exact > 0.0) {
+          REQUIRE(r.status == ContactStatus::kSeparated);
+          CHECK(r.distance == Approx(exact).margin(1e-15));
+          CHECK((r.n_W - n_expected).norm() == 0.0);
+          const Vec3& on_shape = swap ? r.p2_W : r.p1_W;
+          CHECK(std::abs(surface_excess(*s.shape, p, on_shape)) <= 1e-14);
+        } else {
+          CHECK(r.status == ContactStatus::kPenetrating);
+          CHECK(r.penetration_depth == Approx(-exact).margin(1e-15));
+        }
+      }
+      // No surface point lies below the support point.
+      std::normal_distribution<double> g(0.0, 1.0);
+      for (int k = 0; k < 200; ++k) {
+        const Vec3 u = Vec3(g(rng), g(rng), g(rng)).normalized();
+        CHECK(support_W(*s.shape, p.x_W, p.q_WM, u).z() >= exact - 1e-15);
+      }
+    }
+  }
+}
+
+TEST_CASE("smooth shapes: patch of a cylinder's cap, a cylinder's and a capsule's side, a point",
+          "[distance][smooth][patch]") {
+  const TestShape ground = make_test_shape("ground", make_halfspace(Vec3::UnitZ(), 0.0));
+  const TestShape disk = make_test_shape("disk", make_cylinder(0.4, 0.02));
+  const TestShape capsule = make_test_shape("capsule", make_capsule(0.2, 0.35));
+  const TestShape ellipsoid = make_test_shape("ellipsoid", make_ellipsoid(Vec3(0.3, 0.5, 0.7)));
+  const double envelope = 1e-4;
+  auto patch_of = [&](const TestShape& s, const Pose& pose) {
+    PairCache cache;
+    const DistanceResult r =
+        closest_features(*s.geometry, pose, *ground.geometry, Pose{}, cache, 100);
+    REQUIRE(r.status == ContactStatus::kSeparated);
+    return contact_patch(*s.geometry, pose, *ground.geometry, Pose{}, r, envelope);
+  };
+  const double gap = 3e-5;
+  SECTION("a disk flat on the ground: the inscribed 16-gon of its rim") {
+    const std::vector<Vec3> patch = patch_of(disk, Pose{Vec3(1, 2, 0.02 + gap), Quat::Identity()});
+    REQUIRE(patch.size() == 16);
+    Vec3 centre = Vec3::Zero();
+    for (const Vec3& x : patch) {
+      CHECK(std::hypot(x.x() - 1, x.y() - 2) == Approx(0.4).epsilon(1e-12));
+      CHECK(x.z() == Approx(0.0).margin(1e-15));
+      centre += x / 16.0;
+    }
+    CHECK((centre - Vec3(1, 2, 0)).norm() <= 1e-12);
+    // Counter-clockwise about the contact normal (up).
+    CHECK((patch[1] - patch[0]).cross(patch[2] - patch[1]).z() > 0.0);
+  }
+  SECTION("a disk on its rim, axis horizontal: the side segment") {
+    const Quat q(Eigen::AngleAxisd(0.5 * 3.14159265358979323846, Vec3::UnitX()));
+    const std::vector<Vec3> patch = patch_of(disk, Pose{Vec3(0, 0, 0.4 + gap), q});
+    REQUIRE(patch.size() == 2);
+    CHECK(std::abs((patch[0] - patch[1]).norm() - 0.04) <= 1e-12);
+    for (const Vec3& x : patch) CHECK(x.z() == Approx(0.0).margin(1e-15));
+  }
+  SECTION("a disk tilted beyond the envelope: one point") {
+    const Quat q(Eigen::AngleAxisd(0.1, Vec3::UnitX()));
+    Pose pose{Vec3::Zero(), q};
+    pose.x_W.z() = -support_W(*disk.shape, Vec3::Zero(), q, -Vec3::UnitZ()).z() + gap;
+    CHECK(patch_of(disk, pose).size() == 1);
+  }
+  SECTION("a capsule lying down: its side segment; standing: one point") {
+    const Quat q(Eigen::AngleAxisd(0.5 * 3.14159265358979323846, Vec3::UnitY()));
+    const std::vector<Vec3> lying = patch_of(capsule, Pose{Vec3(0, 0, 0.2 + gap), q});
+    REQUIRE(lying.size() == 2);
+    CHECK(std::abs((lying[0] - lying[1]).norm() - 0.7) <= 1e-12);
+    CHECK(patch_of(capsule, Pose{Vec3(0, 0, 0.55 + gap), Quat::Identity()}).size() == 1);
+  }
+  SECTION("an ellipsoid: one point, at the support point") {
+    const std::vector<Vec3> patch =
+        patch_of(ellipsoid, Pose{Vec3(0, 0, 0.7 + gap), Quat::Identity()});
+    REQUIRE(patch.size() == 1);
+    CHECK((patch[0] - Vec3::Zero()).norm() <= 1e-15);
+  }
+}
+
+TEST_CASE("smooth shapes: the radii the time-of-impact bound uses", "[distance][smooth]") {
+  // A loaded ball's surface turns onto itself about its centre: rotation about the centre of mass
+  // moves its support point no faster than the centre moves (|omega| |offset|); every other smooth
+  // shape sweeps its whole radius.
+  const TestShape ball = make_test_shape("loaded ball", make_loaded_ball(0.3, -0.1));
+  CHECK(ball.geometry->rotation_radius() == Approx(0.1).epsilon(1e-15));
+  CHECK(ball.geometry->reach() == Approx(0.4).epsilon(1e-15));
+  const TestShape disk = make_test_shape("disk", make_cylinder(0.4, 0.3));
+  CHECK(disk.geometry->rotation_radius() == Approx(0.5).epsilon(1e-15));
+  CHECK(disk.geometry->reach() == Approx(0.5).epsilon(1e-15));
+  // Along any direction, the support point of the ball rotated by a small angle moves at most
+  // |offset| times the angle.
+  std::mt19937_64 rng(1607);
+  for (int k = 0; k < 1000; ++k) {
+    const Quat q = random_rotation(rng);
+    std::normal_distribution<double> g(0.0, 1.0);
+    const Vec3 axis = Vec3(g(rng), g(rng), g(rng)).normalized();
+    const Vec3 d = Vec3(g(rng), g(rng), g(rng)).normalized();
+    const double angle = 1e-3;
+    const Quat q2 = Quat(Eigen::AngleAxisd(angle, axis)) * q;
+    const double moved = d.dot(support_W(*ball.shape, Vec3::Zero(), q2, d)) -
+                         d.dot(support_W(*ball.shape, Vec3::Zero(), q, d));
+    CHECK(std::abs(moved) <= 0.1 * angle * (1 + 1e-9));
+  }
 }

@@ -23,8 +23,16 @@ Body make_body(const TestShape& s, MotionKind kind, const BodyState& state) {
   b.name = s.name;
   b.motion = kind;
   b.shape = s.shape;
-  b.mass = kind == MotionKind::kDynamic ? mass_properties_from_density(*s.shape, 1000.0)
-                                        : infinite_mass_properties();
+  if (kind != MotionKind::kDynamic) {
+    b.mass = infinite_mass_properties();
+  } else if (const auto* ball = std::get_if<LoadedBall>(s.shape.get())) {
+    // A loaded ball's mass properties are given: a solid ball's, about its centre of mass.
+    const double m = 1000.0 * 4.0 / 3.0 * M_PI * std::pow(ball->radius, 3);
+    const double I = 0.4 * m * ball->radius * ball->radius;
+    b.mass = mass_properties_from_inertia(m, Vec3(I, I, 0.8 * I).asDiagonal());
+  } else {
+    b.mass = mass_properties_from_density(*s.shape, 1000.0);
+  }
   b.state = state;
   return b;
 }
@@ -147,22 +155,31 @@ TEST_CASE("exact times of impact for spheres", "[distance][toi]") {
   }
 }
 
-TEST_CASE("the bound never overshoots on 10,000 random ballistic trajectory pairs",
-          "[distance][toi][random]") {
+namespace {
+
+struct ToiTrials {
+  long trials = 0, finite = 0, exact = 0, overshoots = 0, contacts = 0;
+  double sum_ratio = 0.0;
+  long count_by_kind[5] = {0, 0, 0, 0, 0};
+};
+
+// `count` random trajectory pairs of a mover (one of `movers`) against another mover, a fixed
+// block, a kinematic turntable, a kinematic halfspace spinning about its normal and moving up, or
+// a kinematic paddle: the bound against the true first time the gap falls to the target (dense
+// sampling refined by bisection, exact motion from core/ballistic).
+ToiTrials toi_trials(const std::vector<TestShape>& movers, std::uint64_t seed, long count) {
   Settings settings;
   settings.envelope_m = 1e-3;
   settings.toi_min_progress_s = 0.0;  // the raw conservative bound
   const double d_target = 0.5 * settings.envelope_m;
-  const std::vector<TestShape> movers = {cube(), tetrahedron(), coin(), sliver(), ball()};
   const TestShape platter = make_test_shape("platter", ConvexPolyhedron::prism(1.5, 0.05, 24));
   const TestShape ground = make_test_shape("ground", Halfspace{Vec3::UnitZ(), 0.0});
   const TestShape block = cube();
-  std::mt19937_64 rng(424242);
+  std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(0.0, 1.0);
-  long trials = 0, finite = 0, exact = 0, overshoots = 0, contacts = 0;
-  double sum_ratio = 0.0;
-  long count_by_kind[5] = {0, 0, 0, 0, 0};
-  while (trials < 10000) {
+  ToiTrials out;
+  long& trials = out.trials;
+  while (trials < count) {
     const int kind = static_cast<int>(trials % 5);
     const TestShape& s1 = movers[static_cast<std::size_t>(u(rng) * movers.size())];
     BodyState st1, st2;
@@ -219,12 +236,12 @@ TEST_CASE("the bound never overshoots on 10,000 random ballistic trajectory pair
         closest_features(*s1.geometry, pose_of(st1), *s2->geometry, pose_of(st2), cache, 10000);
     if (r.status != ContactStatus::kSeparated || r.distance <= 2.0 * d_target) continue;
     ++trials;
-    ++count_by_kind[kind];
+    ++out.count_by_kind[kind];
     const ToiBound bound =
         time_of_impact(b1, st1, *s1.geometry, b2, st2, *s2->geometry, r, kGravity, settings);
     REQUIRE(bound.dt >= 0.0);
-    if (std::isfinite(bound.dt)) ++finite;
-    if (bound.exact) ++exact;
+    if (std::isfinite(bound.dt)) ++out.finite;
+    if (bound.exact) ++out.exact;
     // The true first time the gap falls to d_target, searched over [0, min(bound, 1 s)] (a bit
     // beyond the bound when it is finite, to measure its tightness).
     const double horizon = std::min(std::isfinite(bound.dt) ? 1.5 * bound.dt : 1.0, 1.0);
@@ -252,27 +269,54 @@ TEST_CASE("the bound never overshoots on 10,000 random ballistic trajectory pair
       t_prev = t;
     }
     if (std::isfinite(t_true)) {
-      ++contacts;
+      ++out.contacts;
       const double ratio = bound.dt / t_true;
-      sum_ratio += std::min(ratio, 1.0);
+      out.sum_ratio += std::min(ratio, 1.0);
       const bool over = bound.dt > t_true * (1.0 + 1e-9) + 1e-12;
       if (over) {
-        ++overshoots;
+        ++out.overshoots;
         UNSCOPED_INFO("overshoot: kind " << kind << " " << s1.name << "-" << s2->name << " bound "
                                          << bound.dt << " true " << t_true << " exact "
                                          << bound.exact);
       }
     }
   }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("the bound never overshoots on 10,000 random ballistic trajectory pairs",
+          "[distance][toi][random]") {
+  const ToiTrials t = toi_trials({cube(), tetrahedron(), coin(), sliver(), ball()}, 424242, 10000);
   std::printf(
       "TOI: %ld trajectory pairs (dynamic-dynamic %ld, on fixed block %ld, on turntable "
       "%ld, on spinning halfspace %ld, at kinematic paddle %ld), finite bounds %ld, exact "
       "%ld, reached d_target within min(1.5 bound, 1 s) %ld, overshoots %ld, mean bound/true "
       "%.3f\n",
-      trials, count_by_kind[0], count_by_kind[1], count_by_kind[2], count_by_kind[3],
-      count_by_kind[4], finite, exact, contacts, overshoots, contacts ? sum_ratio / contacts : 0.0);
-  CHECK(overshoots == 0);
-  CHECK(contacts > 1000);
+      t.trials, t.count_by_kind[0], t.count_by_kind[1], t.count_by_kind[2], t.count_by_kind[3],
+      t.count_by_kind[4], t.finite, t.exact, t.contacts, t.overshoots,
+      t.contacts ? t.sum_ratio / t.contacts : 0.0);
+  CHECK(t.overshoots == 0);
+  CHECK(t.contacts > 1000);
+}
+
+TEST_CASE("the bound never overshoots for the smooth shapes (3,000 random trajectory pairs)",
+          "[distance][toi][random][smooth]") {
+  // A loaded ball far off centre (its surface sweeps |offset| + radius about the centre of mass),
+  // a thin disk, an ellipsoid, a capsule.
+  const ToiTrials t =
+      toi_trials({make_test_shape("ellipsoid", make_ellipsoid(Vec3(0.2, 0.3, 0.45))),
+                  make_test_shape("disk", make_cylinder(0.4, 0.02)),
+                  make_test_shape("capsule", make_capsule(0.15, 0.3)),
+                  make_test_shape("loaded ball", make_loaded_ball(0.3, 0.2))},
+                 1606, 3000);
+  std::printf(
+      "TOI smooth: %ld pairs, finite %ld, reached %ld, overshoots %ld, mean bound/true "
+      "%.3f\n",
+      t.trials, t.finite, t.contacts, t.overshoots, t.contacts ? t.sum_ratio / t.contacts : 0.0);
+  CHECK(t.overshoots == 0);
+  CHECK(t.contacts > 300);
 }
 
 TEST_CASE("inside the target gap and receding: back down at the target gap, else after -2b/a",

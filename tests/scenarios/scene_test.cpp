@@ -35,6 +35,45 @@ TEST_CASE("the base scene of the corpus parses", "[scenarios][scene]") {
   CHECK(scene.world.settings.envelope_m == 1e-4);
 }
 
+TEST_CASE("the smooth shapes' keys build their shapes, masses and compound parts",
+          "[scenarios][scene][smooth]") {
+  json scene = load_corpus()["base"];
+  scene["bodies"][1] = json::parse(R"({"name": "ball", "mass": 0.02, "inertia": [1.3e-6, 1.3e-6, 1.2e-6],
+      "shape": {"type": "loaded_ball", "radius": 0.02, "com_offset": -0.005}, "position": [0, 0, 0.5]})");
+  scene["bodies"][2]["shape"] = json::parse(R"({"type": "cylinder", "radius": 0.1, "half_height": 0.02})");
+  scene["bodies"].push_back(json::parse(R"({"name": "egg", "density": 1000, "position": [2, 0, 1],
+      "shape": {"type": "ellipsoid", "semi_axes": [0.02, 0.03, 0.05]}})"));
+  scene["bodies"].push_back(json::parse(R"({"name": "pill", "mass": 2.0, "position": [3, 0, 1],
+      "shape": {"type": "capsule", "radius": 0.01, "half_length": 0.03}})"));
+  scene["bodies"].push_back(json::parse(R"({"name": "rack", "motion": "fixed", "position": [5, 0, 1],
+      "shape": {"type": "compound", "parts": [
+        {"shape": {"type": "cylinder", "radius": 0.1, "half_height": 0.5}, "position": [0, 0, 0]},
+        {"shape": {"type": "capsule", "radius": 0.05, "half_length": 0.2}, "position": [0, 1, 0]},
+        {"shape": {"type": "ellipsoid", "semi_axes": [0.1, 0.2, 0.3]}, "position": [0, 2, 0]}]}})"));
+  const palpable::Scene s = palpable::scene_from_json(scene, "smooth.json");
+  const auto& bodies = s.world.bodies;
+  REQUIRE(bodies.size() == 6);
+  const auto& ball = std::get<palpable::LoadedBall>(*bodies[1].shape);
+  CHECK(ball.radius == 0.02);
+  CHECK(ball.com_offset == -0.005);
+  // The given inertia, ascending principal moments.
+  CHECK(bodies[1].mass.mass == 0.02);
+  CHECK(bodies[1].mass.principal_moments.x() == Approx(1.2e-6).epsilon(1e-12));
+  CHECK(bodies[1].mass.principal_moments.z() == Approx(1.3e-6).epsilon(1e-12));
+  // A 0.1 x 0.04 m cylinder at 1000 kg/m^3: pi r^2 2h rho.
+  const double kPi = 3.14159265358979323846;
+  CHECK(std::get<palpable::Cylinder>(*bodies[2].shape).half_height == 0.02);
+  CHECK(bodies[2].mass.mass == Approx(kPi * 0.01 * 0.04 * 1000).epsilon(1e-14));
+  CHECK(bodies[3].mass.mass == Approx(4.0 / 3.0 * kPi * 0.02 * 0.03 * 0.05 * 1000).epsilon(1e-14));
+  CHECK(std::get<palpable::Capsule>(*bodies[4].shape).half_length == 0.03);
+  CHECK(bodies[4].mass.mass == Approx(2.0).epsilon(1e-15));
+  const auto& rack = std::get<palpable::Compound>(*bodies[5].shape);
+  REQUIRE(rack.parts.size() == 3);
+  CHECK(std::holds_alternative<palpable::Cylinder>(*rack.parts[0].shape));
+  CHECK(std::holds_alternative<palpable::Capsule>(*rack.parts[1].shape));
+  CHECK(std::holds_alternative<palpable::Ellipsoid>(*rack.parts[2].shape));
+}
+
 TEST_CASE("every bad scene is rejected naming its JSON path", "[scenarios][scene]") {
   json corpus = load_corpus();
   const json& cases = corpus["cases"];

@@ -411,3 +411,51 @@ TEST_CASE("contact: the energy a collision may create is the integration's and t
   const double v_micro = std::sqrt(2.0 * 9.81 * posed.settings.envelope_m);
   CHECK(r.energy_allowance >= 0.5 * r.record.impulse_W.norm() * v_micro);
 }
+
+TEST_CASE("contact: a true disk flat, on its rim, on its side, and an ellipsoid at a point",
+          "[contact][smooth]") {
+  const double r = 0.02, h = 0.002, gap = 2e-5;
+  auto disk = [&](const Vec3& x, const Quat& q, const Vec3& v, const Vec3& w) {
+    return test::dynamic_body("disk", make_cylinder(r, h), 0.02, x, q, v, w);
+  };
+  SECTION("landing flat: the inscribed 16-gon, resolved through the centre of mass") {
+    Posed posed(disk(Vec3(0.1, 0.2, h + gap), Quat::Identity(), Vec3(0.3, 0, -0.5), Vec3::Zero()),
+                test::fixed_ground());
+    const Contact c = posed.contact();
+    REQUIRE(c.patch.size() == 16);
+    CHECK(c.placement == Placement::kFace);
+    CHECK((c.point_W - Vec3(0.1, 0.2, 0.0)).norm() <= 1e-12);
+    // No rocking from the impulse: the in-plane angular velocity stays zero.
+    const Resolution res = posed.resolve_it(Material{0.5, 0.0});
+    CHECK(std::hypot(res.w1_W.x(), res.w1_W.y()) <= 1e-12);
+  }
+  // A point contact is placed midway across the gap.
+  SECTION("rolling on its rim (tilted 30 degrees): one point, the rim's lowest") {
+    const Quat q = test::about(Vec3::UnitX(), kPi / 6);
+    const double z = r * std::sin(kPi / 6) + h * std::cos(kPi / 6);
+    Posed posed(disk(Vec3(0, 0, z + gap), q, Vec3(0, 0, -0.1), Vec3(0, 0, 20)),
+                test::fixed_ground());
+    const Contact c = posed.contact();
+    CHECK(c.patch.size() == 1);
+    CHECK(c.placement == Placement::kPoint);
+    CHECK(std::abs(c.point_W.z() - gap / 2) <= 1e-12);
+    CHECK(std::abs(c.point_W.y() - (-r * std::cos(kPi / 6) + h * std::sin(kPi / 6))) <= 1e-12);
+  }
+  SECTION("on its side (axis horizontal): the side's segment") {
+    const Quat q = test::about(Vec3::UnitX(), kPi / 2);
+    Posed posed(disk(Vec3(0, 0, r + gap), q, Vec3(0, 0, -0.1), Vec3::Zero()), test::fixed_ground());
+    const Contact c = posed.contact();
+    REQUIRE(c.patch.size() == 2);
+    CHECK((c.patch[0] - c.patch[1]).norm() == Approx(2 * h).epsilon(1e-12));
+    CHECK(c.placement == Placement::kSegment);
+  }
+  SECTION("an ellipsoid touches at its support point") {
+    Body egg = test::dynamic_body("egg", make_ellipsoid(Vec3(0.02, 0.03, 0.05)), 0.1,
+                                  Vec3(0, 0, 0.05 + gap), Quat::Identity(), Vec3(0, 0, -0.2));
+    Posed posed(egg, test::fixed_ground());
+    const Contact c = posed.contact();
+    CHECK(c.patch.size() == 1);
+    CHECK(c.placement == Placement::kPoint);
+    CHECK((c.point_W - Vec3(0, 0, gap / 2)).norm() <= 1e-12);
+  }
+}

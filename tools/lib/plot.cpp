@@ -172,6 +172,14 @@ void outlines_of(const Shape& shape, const Vec3& x, const Quat& q, std::vector<O
     std::vector<Eigen::Vector2d> points;
     for (const Vec3& v : p->vertices()) points.push_back((x + q * v).head<2>());
     out.push_back(hull_2d(points));
+  } else if (is_smooth_convex(shape)) {
+    // The outline seen from above: the horizontal support points, exact on the silhouette.
+    Outline outline;
+    for (int i = 0; i < 48; ++i) {
+      const double phi = 2.0 * kPi * i / 48.0;
+      outline.push_back(support_W(shape, x, q, Vec3(std::cos(phi), std::sin(phi), 0.0)).head<2>());
+    }
+    out.push_back(hull_2d(outline));
   } else if (const Compound* c = std::get_if<Compound>(&shape)) {
     for (const CompoundPart& part : c->parts) {
       outlines_of(*part.shape, x + q * part.position_M, q * part.orientation_M, out);
