@@ -623,10 +623,6 @@ bool to_point_pair(HeldLink& link, const BodyState& mover, const BodyState& supp
   for (std::size_t e = 0; e < n; ++e) {
     const std::vector<Vec3> s = {support.x_W + R_S * link.support_face_S[e],
                                  support.x_W + R_S * link.support_face_S[(e + 1) % n]};
-    if (m.size() == 2 && (m[1] - m[0]).cross(s[1] - s[0]).norm() <=
-                             1e-9 * (m[1] - m[0]).norm() * (s[1] - s[0]).norm()) {
-      continue;  // parallel: no point contact
-    }
     Vec3 q_m, q_s;
     closest_core_points(m, s, q_m, q_s);
     const double d = (q_m - q_s).norm();
