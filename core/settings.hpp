@@ -170,6 +170,11 @@ inline constexpr double kTouchingGap = 1e-12;
 // it is applied where it is (each closes the gap by the ratio of the true closing speed to its
 // bound; an exact bound needs one).
 inline constexpr int kMaxApproachSteps = 64;
+// Closest-feature queries one search for an impact's instant of contact may make
+// (distance/impact_instant.hpp; each step is certified and, near a transversal root, closes the
+// gap quadratically: three to five suffice from half an envelope). Beyond it the pair is checked
+// again where the steps got.
+inline constexpr int kMaxInstantIterations = 32;
 // Hulls built from points: relative coplanarity tolerance [-], times the diagonal of the points'
 // bounding box (facets whose planes agree within it become one face; thinner point sets are
 // rejected as coplanar). A scene's hull sets its own with "coplanar_tolerance".

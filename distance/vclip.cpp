@@ -531,6 +531,24 @@ struct Solver {
     p_b = pts[1];
   }
 
+  // The normal that separated features fix by themselves, oriented from B to A (along `diff`,
+  // from B's closest point to A's): a face's, or two crossing edges' cross product; zero where
+  // only the closest points fix it (a vertex against a vertex or an edge, parallel edges). At a
+  // gap of a few ulps of the coordinates diff / |diff| is mostly rounding (an impact applied at
+  // the instant of contact, DESIGN.md §8.5); these are not.
+  Vec3 feature_normal(const Vec3& diff) const {
+    if (f[0].kind == FeatureKind::kFace) return -mesh[0]->face_normal(f[0].index);
+    if (f[1].kind == FeatureKind::kFace) return R * mesh[1]->face_normal(f[1].index);
+    if (f[0].kind != FeatureKind::kEdge || f[1].kind != FeatureKind::kEdge) return Vec3::Zero();
+    const Vec3 ua = mesh[0]->head(f[0].index) - mesh[0]->tail(f[0].index);
+    const Vec3 ub = R * (mesh[1]->head(f[1].index) - mesh[1]->tail(f[1].index));
+    Vec3 n = ua.cross(ub);
+    const double norm = n.norm();
+    if (!(norm > 1e-6 * ua.norm() * ub.norm())) return Vec3::Zero();  // (near) parallel
+    n /= norm;
+    return n.dot(diff) < 0.0 ? Vec3(-n) : n;
+  }
+
   // A normal for features that meet (zero distance), oriented from B to A.
   Vec3 touching_normal() const {
     Vec3 n = Vec3::Zero();
@@ -619,7 +637,8 @@ VClipResult vclip(const FeatureMesh& a, const FeatureMesh& b, const Mat3& R_AB, 
   result.distance = diff.norm();
   if (step == Step::kDone && result.distance > 0.0) {
     result.status = ContactStatus::kSeparated;
-    result.n_A = diff / result.distance;
+    const Vec3 n = s.feature_normal(diff);
+    result.n_A = n.squaredNorm() > 0.0 ? n : Vec3(diff / result.distance);
     return result;
   }
   result.distance = 0.0;

@@ -40,6 +40,9 @@ struct SimulationStats {
   std::uint64_t floored_bounds = 0;      // bounds raised to settings.toi_min_progress_s
   std::uint64_t exact_bounds = 0;        // bounds that are exact times of impact
   std::uint64_t approach_checks = 0;     // checks of an impact moved on to its instant of contact
+  std::uint64_t instant_refinements = 0;  // searches for the instant of contact (polyhedra)
+  std::uint64_t instant_iterations = 0;   // ... their closest-feature queries
+  std::uint64_t instant_unfound = 0;      // ... ended receding, stalled or at their query cap
   std::uint64_t penetrations = 0;        // queries that found overlapping bodies
   std::uint64_t distance_failures = 0;   // closest-feature walks that hit their step limit
   std::uint64_t impulse_failures = 0;    // collisions whose integration failed

@@ -114,8 +114,31 @@ CollisionRecord Simulation::Impl::collide(const PairSet::Pair& p, Contact& c, do
   return std::move(out.record);
 }
 
-double Simulation::Impl::time_to_contact(const PairSet::Pair& p, const Contact& c,
-                                         const DistanceResult& contact, double t) const {
+double Simulation::Impl::touching_gap(const PairSet::Pair& p) const {
+  double scale = 0.0;  // the finite reaches (a halfspace's is infinite)
+  for (BodyId id : {p.a, p.b}) {
+    if (std::isfinite(pairs.geometry(id).reach())) scale += pairs.geometry(id).reach();
+  }
+  return kTouchingGap * scale;
+}
+
+ImpactInstant Simulation::Impl::refine_instant(const PairSet::Pair& p, const BodyState& s1,
+                                               const BodyState& s2, const DistanceResult& dr,
+                                               const PairCache& cache) {
+  const ImpactInstant in =
+      impact_instant(body(p.a), s1, pairs.geometry(p.a), body(p.b), s2, pairs.geometry(p.b), dr,
+                     cache, world.gravity_W, settings(), touching_gap(p), kMaxInstantIterations);
+  if (in.status != InstantStatus::kNotApplicable) {
+    ++stats.instant_refinements;
+    stats.instant_iterations += static_cast<std::uint64_t>(in.iterations);
+    if (in.status != InstantStatus::kFound) ++stats.instant_unfound;
+  }
+  return in;
+}
+
+double Simulation::Impl::time_to_contact(PairSet::Pair& p, const Contact& c,
+                                         const DistanceResult& dr, const DistanceResult& contact,
+                                         double t) {
   // Only impacts: a microcollision is resting contact (held under the persistent model), and
   // lands where the train puts it. Pairs with a held body keep the envelope's instant (their
   // bound follows the island's motion, not a closed form).
@@ -123,23 +146,35 @@ double Simulation::Impl::time_to_contact(const PairSet::Pair& p, const Contact& 
       p.approach_steps >= kMaxApproachSteps) {
     return 0.0;
   }
-  double scale = 0.0;  // the finite reaches (a halfspace's is infinite)
-  for (BodyId id : {p.a, p.b}) {
-    if (std::isfinite(pairs.geometry(id).reach())) scale += pairs.geometry(id).reach();
-  }
-  if (!(contact.distance > kTouchingGap * scale)) return 0.0;
+  if (!(contact.distance > touching_gap(p))) return 0.0;
   if (is_microcollision(initial_normal_velocity(c), c.v_micro, settings())) return 0.0;
   const BodyState& s1 = body(p.a).state;
   const BodyState& s2 = body(p.b).state;
+  auto usable = [&](double dt) { return dt > 0.0 && std::isfinite(dt) && t + dt > t ? dt : 0.0; };
   const ToiBound b = time_to_touch(body(p.a), s1, pairs.geometry(p.a), body(p.b), s2,
                                    pairs.geometry(p.b), contact, p.cache, world.gravity_W,
                                    settings());
-  // Only where the instant is exact (spheres against spheres and planes). Polyhedra keep the
-  // envelope's instant: at a gap of 0 their closest features degenerate (a face landing flat on
-  // a face was found at one corner, lost its centre of pressure and tumbled), so they collide
-  // where the bound aimed, half an envelope up.
-  if (!b.exact || !(b.dt > 0.0) || !std::isfinite(b.dt) || !(t + b.dt > t)) return 0.0;
-  return b.dt;
+  // Spheres against spheres and planes: the closed form.
+  if (b.exact) return usable(b.dt);
+  // Otherwise (polyhedra, compounds) the gap is followed along the trajectories to where it
+  // closes (DESIGN.md §8.5; distance/impact_instant.hpp): every step certified, so the instant
+  // found is the first. Not yet under the persistent model: a coin held from a gap of a few
+  // ulps made its island's integration crawl (the shipped coins scene took 72 s of CPU instead
+  // of 0.1 s); there polyhedra still collide at the envelope's instant.
+  if (persistent()) return 0.0;
+  const ImpactInstant in = refine_instant(p, s1, s2, dr, p.cache);
+  switch (in.status) {
+    case InstantStatus::kFound: return usable(in.dt);
+    case InstantStatus::kStalled:
+      // The clock cannot resolve the instant further: collide where the steps stopped.
+      if (usable(in.dt) > 0.0) p.approach_steps = kMaxApproachSteps - 1;
+      return usable(in.dt);
+    case InstantStatus::kReceding:      // the gap opens again: checked there as any pair
+    case InstantStatus::kNotConverged:  // checked again from where the steps got
+      return usable(in.dt);
+    case InstantStatus::kNotApplicable: return 0.0;
+  }
+  return 0.0;
 }
 
 std::optional<CollisionRecord> Simulation::Impl::check_pair(std::uint32_t index, double t) {
@@ -160,9 +195,13 @@ std::optional<CollisionRecord> Simulation::Impl::check_pair(std::uint32_t index,
   Contact c = make_contact(side(p.a, s1), side(p.b, s2), contact, settings(), world.gravity_W,
                            /*with_patch=*/true);
   // Under the persistent model a face whose corner lands is a collision even while its centre
-  // of pressure does not approach (the hold, not a microcollision train, must catch it).
+  // of pressure does not approach (the hold, not a microcollision train, must catch it). So at
+  // the instant of contact (DESIGN.md §8.5), where no envelope is left to absorb a corner that
+  // the last impulse did not stop: a face landing flat on a dynamic face is struck at its
+  // corners one after another at that instant.
   const bool approaches = approaching(c);
-  const bool lands = approaches || (persistent() && patch_approaching(c, s1, s2));
+  const bool lands = approaches || ((persistent() || contact.distance <= touching_gap(p)) &&
+                                    patch_approaching(c, s1, s2));
   if (lands && !approaches) {
     // Only a corner lands: the collision acts there, not through the centre of pressure, which
     // recedes (integrated from a receding start, that impulse created energy: 6.5e-4 J for a
@@ -182,7 +221,7 @@ std::optional<CollisionRecord> Simulation::Impl::check_pair(std::uint32_t index,
     schedule_pair(index, next);
     return std::nullopt;
   }
-  if (const double dt = time_to_contact(p, c, contact, t); dt > 0.0) {
+  if (const double dt = time_to_contact(p, c, dr, contact, t); dt > 0.0) {
     // An impact lands where the gap closes, not where the bound stopped (half an envelope up).
     ++p.approach_steps;
     ++stats.approach_checks;

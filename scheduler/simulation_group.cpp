@@ -87,17 +87,18 @@ std::optional<CollisionRecord> Simulation::Impl::collide_group(std::uint32_t ind
         contact.distance > settings().envelope_m) {
       continue;
     }
-    // Sequential where the physics is: a contact whose exact instant of touching is still
-    // ahead (spheres and planes) collides then, on its own.
-    double reach = 0.0;
-    for (BodyId id : {q.a, q.b}) {
-      if (std::isfinite(pairs.geometry(id).reach())) reach += pairs.geometry(id).reach();
-    }
-    if (!micro && contact.distance > kTouchingGap * reach) {
+    // Sequential where the physics is: a contact whose instant of touching is still ahead
+    // collides then, on its own (exact for spheres and planes, followed along the trajectories
+    // otherwise).
+    if (!micro && contact.distance > touching_gap(q)) {
       const ToiBound ahead = time_to_touch(body(q.a), s1, pairs.geometry(q.a), body(q.b), s2,
                                            pairs.geometry(q.b), contact, cache, world.gravity_W,
                                            settings());
       if (ahead.exact && ahead.dt > 0.0) continue;
+      if (!ahead.exact && !persistent()) {
+        const ImpactInstant in = refine_instant(q, s1, s2, dr, cache);
+        if (in.status != InstantStatus::kNotApplicable && in.dt > 0.0) continue;
+      }
     }
     const Contact c = make_contact(side(q.a, s1), side(q.b, s2), contact, settings(),
                                    world.gravity_W, /*with_patch=*/true);

@@ -8,6 +8,7 @@
 // statistics live here; the contact model (scheduler/contact.hpp) and the islands
 // (scheduler/island.hpp) see values only. Not installed; no other module includes it.
 #include "core/ballistic.hpp"
+#include "distance/impact_instant.hpp"
 #include "distance/toi_bound.hpp"
 #include "scheduler/contact.hpp"
 #include "scheduler/island.hpp"
@@ -152,11 +153,21 @@ struct Simulation::Impl {
   CollisionRecord collide(const PairSet::Pair& p, Contact& c, double t,
                           const ResolveOptions& options = ResolveOptions{});
 
-  // The time from t until the gap of an impact (an approach faster than v_micro) closes [s],
-  // where it is exact (spheres against spheres and planes). 0: collide now (touching already, a
-  // microcollision, a held body, polyhedra, or kMaxApproachSteps spent).
-  double time_to_contact(const PairSet::Pair& p, const Contact& c, const DistanceResult& contact,
-                         double t) const;
+  // The touching gap of pair p [m]: kTouchingGap times the sum of its bodies' finite reaches.
+  double touching_gap(const PairSet::Pair& p) const;
+
+  // The instant pair p's gap closes, from states s1, s2 at the same time with closest features
+  // dr (the query that filled `cache`): distance/impact_instant.hpp, counted in the statistics.
+  ImpactInstant refine_instant(const PairSet::Pair& p, const BodyState& s1, const BodyState& s2,
+                               const DistanceResult& dr, const PairCache& cache);
+
+  // The time from t until the gap of an impact (an approach faster than v_micro) closes [s]:
+  // exact for spheres against spheres and planes, followed along the trajectories otherwise
+  // (refine_instant). 0: collide now (touching already, a microcollision, a held body, a
+  // kinematic body, or kMaxApproachSteps spent). `dr`: the pair's query; `contact`: its piece
+  // the collision would be resolved at (contact_result).
+  double time_to_contact(PairSet::Pair& p, const Contact& c, const DistanceResult& dr,
+                         const DistanceResult& contact, double t);
 
   // A pair's event: collide if within the envelope and approaching — an impact at the instant
   // its gap closes —, else re-bound. Returns the collision, if any.

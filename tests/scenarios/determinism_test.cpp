@@ -56,13 +56,13 @@ struct Expected {
 // The committed final-state hashes of the shipped scenes.
 const Expected kExpected[] = {
     {"ball_on_platter.json", 0xa16074210345a65bull},
-    {"balls_in_dish.json", 0x6b7604b53b8c29d6ull},
+    {"balls_in_dish.json", 0xf15783b2637bf2baull},
     {"block_on_ramp_accelerating.json", 0x6b95d2cc13eadd0aull},
     {"block_on_ramp_decelerating.json", 0xa6bcfd47994a1366ull},
-    {"bowling.json", 0xb0d10c42abe3878full},
+    {"bowling.json", 0x0ac28b1558ff64ecull},
     {"chain_of_balls.json", 0x77e5ac8fe4550a70ull},
-    {"coins.json", 0xd69371922a102d5cull},
-    {"pool_break.json", 0x10358a591eee5f9bull},
+    {"coins.json", 0x882f15f6c0fdb34bull},
+    {"pool_break.json", 0x412f2ba6c63bad8aull},
     {"sphere_slide_to_roll.json", 0x8d0cc90c21d15ce4ull},
 };
 
