@@ -64,7 +64,8 @@ BodyMotion body_motion(const Body& body, const BodyState& s, const Vec3& gravity
 
 // The supports of one piece along n0 (its vertices, a sphere's centre offset by its radius, a
 // halfspace's plane), body 1's side (`lower`: bounded from below, its surface toward -n0) or body
-// 2's. False if the piece has no bounded model (a halfspace not facing along n0).
+// 2's. False if the piece has no bounded model (a halfspace not facing along n0, a smooth
+// piece).
 bool piece_supports(const ShapeGeometry::Piece& piece, const BodyMotion& m, const Vec3& n0,
                     bool lower, std::vector<Support>& out) {
   out.clear();
@@ -101,6 +102,8 @@ bool piece_supports(const ShapeGeometry::Piece& piece, const BodyMotion& m, cons
       for (int k = 0; k < mesh.num_vertices(); ++k) add(p + R * mesh.vertex(k), 0.0);
       return true;
     }
+    case ShapeGeometry::PieceKind::kSmooth:
+      return false;  // no finite support set (ellipsoid, cylinder, capsule): not refined yet
   }
   return false;
 }

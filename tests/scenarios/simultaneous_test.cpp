@@ -131,8 +131,8 @@ TEST_CASE("a cube dropped flat onto a resting cube turns neither and drifts neit
   // A 1 kg cube (0.1 m) dropped 0.1 m onto a 2 kg cube resting on the floor, mu 0.5: aligned
   // with it, turned 45 degrees about the vertical (an octagonal patch), and 2 cm and 1 cm off
   // centre. The patch between the two holds their relative rotation, the floor holds the base's
-  // (DESIGN.md §4): the landing is a sequence of pair impulses at one instant - base-top, then
-  // floor-base, ... as in a cradle against a wall - each along the normal through the patch,
+  // (DESIGN.md §4): the landing is a sequence of pair impulses - base-top, then floor-base, ...
+  // as in a cradle against a wall - each along the normal through the patch,
   // p = m (u + max(e u, v_micro)) with m the reduced mass m1 m2 / (m1 + m2) between the cubes
   // and the base's mass on the floor (the rebound never slower than the microcollision speed of
   // the default contact model), until nothing approaches faster than v_micro.
@@ -174,7 +174,9 @@ TEST_CASE("a cube dropped flat onto a resting cube turns neither and drifts neit
       }
       CHECK(turning <= 1e-9);
       CHECK(drift <= 1e-9);
-      // The landing instant: the first collision between the cubes, and every collision then.
+      // The landing: the first collision between the cubes, and the collisions of the 5 ms after
+      // it (each pair's at the exact instant its gap closes: the base hovers in its own
+      // microcollision train, so it meets the floor a little after it is struck).
       const auto first = std::find_if(records.all.begin(), records.all.end(), [](const auto& r) {
         return r.a == BodyId{1} && r.b == BodyId{2};
       });
@@ -182,7 +184,9 @@ TEST_CASE("a cube dropped flat onto a resting cube turns neither and drifts neit
       const double v_micro = microcollision_speed(scene.world.settings, 9.81);
       int impulses = 0;
       for (const CollisionRecord& r : records.all) {
-        if (r.t != first->t || r.kind != CollisionKind::kCollision) continue;
+        if (r.t < first->t || r.t > first->t + 0.005 || r.kind != CollisionKind::kCollision) {
+          continue;
+        }
         const double m = r.a == BodyId{0} ? 2.0 : 2.0 / 3.0;
         const double u = r.approach_speed;
         CHECK(r.impulse_W.head<2>().norm() <= 1e-12 * std::abs(r.impulse_W.z()));  // rounding of n
