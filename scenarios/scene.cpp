@@ -97,11 +97,17 @@ std::shared_ptr<const Shape> parse_shape(const Reader& r, const json& value,
                "a halfspace is unbounded: only a fixed or kinematic body may have one");
       }
       r.only_keys(value, path, {"type", "normal", "offset"});
-      Vec3 n = r.vec3(r.required(value, path, "normal"), path + "/normal");
-      if (!(n.norm() > 0.0)) r.fail_value(path + "/normal", value["normal"], "a non-zero vector");
+      const Vec3 n = r.vec3(r.required(value, path, "normal"), path + "/normal");
+      // |n| without squaring the components: (9e190, 0, 1) squared overflows, and normalising by
+      // that infinity made the zero vector, a plane every body touched and none could meet
+      // (tests/fuzz/findings/engine_timeout_distance_steps.bin); (0, 0, 1e-170) underflows to 0.
+      const double length = n.stableNorm();
+      if (!(length > 0.0) || !std::isfinite(length)) {
+        r.fail_value(path + "/normal", value["normal"], "a non-zero vector");
+      }
       double offset = value.contains("offset") ? r.number(value["offset"], path + "/offset") : 0.0;
       // n . x <= offset with |n| != 1 is the same solid as n/|n| . x <= offset/|n|.
-      return std::make_shared<const Shape>(Halfspace{n.normalized(), offset / n.norm()});
+      return std::make_shared<const Shape>(Halfspace{n / length, offset / length});
     }
     if (type == "compound") {
       if (!allow_unbounded) {
