@@ -68,8 +68,11 @@ palpable::tools::CommandRegistration registration{
         }
         palpable::tools::RunResult result = palpable::tools::run_scene(*options);
         // With an output streamed to standard output, the summary goes to stderr.
-        const bool stdout_taken =
-            options->trace_path == "-" || options->events_path == "-" || *summary_path == "-";
+        auto stdout_named = [](const std::string& path) {
+          return palpable::tools::names_descriptor(path) == 1;
+        };
+        const bool stdout_taken = stdout_named(options->trace_path) ||
+                                  stdout_named(options->events_path) || stdout_named(*summary_path);
         (stdout_taken ? std::cerr : std::cout) << palpable::tools::summary_text(result);
         for (const std::string& trouble : palpable::tools::numerical_trouble(result.stats)) {
           std::cerr << "palpable: warning: " << options->scene_path << ": " << trouble

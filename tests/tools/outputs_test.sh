@@ -29,6 +29,28 @@ check "no temporary file left beside the target" "! ls target.csv.tmp-* >/dev/nu
 check "--trace - streams the CSV to stdout" "head -1 stdout.csv | grep -q '^t,body,x'"
 check "... and the summary goes to stderr" "grep -q '^scene' summary.txt"
 
+# /dev/stdout (a link to the descriptor) is standard output, as "-" is: through a pipe, and into a
+# file the shell opened - never replaced by a renamed file (`>> log` lost the log's content and the
+# summary went to the unlinked file), never "cannot resolve the symbolic link" (a pipe).
+"$palpable" run "$scenes/coins.json" --trace /dev/stdout 2>summary.txt | cat >piped.csv
+code=${PIPESTATUS[0]}
+check "--trace /dev/stdout into a pipe: exit 0" "[[ $code -eq 0 ]]"
+check "... streams the CSV" "head -1 piped.csv | grep -q '^t,body,x'"
+check "... and the summary goes to stderr" "grep -q '^scene' summary.txt"
+ln -s /dev/stdout stdout.link
+"$palpable" run "$scenes/coins.json" --trace stdout.link 2>/dev/null | cat >piped.csv
+code=${PIPESTATUS[0]}
+check "--trace LINK to /dev/stdout into a pipe: exit 0" "[[ $code -eq 0 ]]"
+check "... streams the CSV" "head -1 piped.csv | grep -q '^t,body,x'"
+check "... the link stays, no sidecar beside it" "[[ -L stdout.link && ! -e stdout.link.json ]]"
+echo precious >log.txt
+"$palpable" run "$scenes/coins.json" --trace /dev/stdout >>log.txt 2>summary.txt
+code=$?
+check "--trace /dev/stdout >> log: exit 0" "[[ $code -eq 0 ]]"
+check "... the log keeps what it held" "head -1 log.txt | grep -q '^precious$'"
+check "... and gains the trace after it" "sed -n 2p log.txt | grep -q '^t,body,x'"
+check "... the summary goes to stderr" "grep -q '^scene' summary.txt"
+
 "$palpable" run "$scenes/coins.json" --trace same.csv --events same.csv >/dev/null 2>err.txt
 code=$?
 check "one file as --trace and --events: exit 2" "[[ $code -eq 2 ]]"

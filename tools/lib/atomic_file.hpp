@@ -5,8 +5,8 @@
 //   SIGTERM or SIGHUP leaves no temporary and no partial file behind;
 // - a symbolic link is followed: its target is written (atomically, if a regular file) and the
 //   link stays a link;
-// - a device, FIFO or socket (/dev/null, /dev/stdout, a pipe) and "-" (standard output) are
-//   written straight through, streaming.
+// - a device, FIFO or socket (/dev/null, a pipe), "-" and /dev/stdout (standard output, whatever
+//   it is: a pipe, a terminal or a file the shell opened) are written straight through, streaming.
 #include <fstream>
 #include <ostream>
 #include <string>
@@ -30,17 +30,23 @@ class AtomicFile {
   bool streaming() const { return temp_path_.empty(); }
 
  private:
-  std::string path_;       // as given
-  std::string final_path_; // where the data ends up (a symlink's target)
-  std::string temp_path_;  // empty when streaming
+  std::string path_;        // as given
+  std::string final_path_;  // where the data ends up (a symlink's target)
+  std::string temp_path_;   // empty when streaming
   std::ofstream out_;
   std::ostream* target_ = &out_;
   bool committed_ = false;
   int slot_ = -1;  // in the signal handler's table of live temporaries
 };
 
-// True when AtomicFile(path) would write straight through: "-", or a path that is (or links to) a
-// device, FIFO or socket.
+// The descriptor an output path names: 1 for "-" and /dev/stdout, N for /dev/fd/N and
+// /proc/self/fd/N, also through symbolic links to them; -1 for any other path. Such a path is the
+// descriptor the process was given (a pipe, a terminal, a file opened by the shell, perhaps with
+// >>): written through, never resolved to a file and renamed over.
+int names_descriptor(const std::string& path);
+
+// True when AtomicFile(path) would write straight through: a descriptor (above), or a path that is
+// (or links to) a device, FIFO or socket.
 bool writes_through(const std::string& path);
 
 // Installs handlers for SIGINT, SIGTERM and SIGHUP that remove every live temporary file of an
