@@ -86,6 +86,26 @@ check "SIGINT during a run: exit 130" "[[ $code -eq 130 ]]"
 check "... no temporary file left" "! ls long.csv.tmp-* >/dev/null 2>&1"
 check "... and no partial trace" "[[ ! -e long.csv ]]"
 
+# An output that fails as it is finished (/dev/full refuses every byte: a full disk) fails the run
+# before any other output is renamed into place: exit 1 and nothing left (the trace and its
+# sidecar stayed).
+if [[ -c /dev/full ]]; then
+  for option in --summary-json --events; do
+    "$palpable" run "$scenes/coins.json" --trace t.csv "$option" /dev/full >/dev/null 2>err.txt
+    code=$?
+    check "$option /dev/full: exit 1" "[[ $code -eq 1 ]]"
+    check "... naming it" "grep -q '/dev/full: write failed' err.txt"
+    check "... and no trace, sidecar or temporary left" "! ls t.csv* >/dev/null 2>&1"
+  done
+fi
+
+# The reader of standard output gone (SIGPIPE) while a file is being written beside it: exit 141,
+# no temporary left (e.csv.tmp-PID stayed).
+"$palpable" run "$scenes/bowling.json" --end 2 --trace - --events e.csv 2>/dev/null | head -1 >/dev/null
+code=${PIPESTATUS[0]}
+check "SIGPIPE on --trace - with --events e.csv: exit 141" "[[ $code -eq 141 ]]"
+check "... no temporary file left, no partial events" "! ls e.csv* >/dev/null 2>&1"
+
 # Each of SIGINT, SIGTERM and SIGHUP, two seconds into a long bowling run: exit 128 + signal, and
 # neither the temporary file nor a partial trace (nor its sidecar) is left. (--end 500 finishes in
 # about 2 s here, too close to the signal: 1e5 s cannot finish first.)

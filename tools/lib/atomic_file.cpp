@@ -144,16 +144,21 @@ AtomicFile::~AtomicFile() {
   unregister_temp(slot_);
 }
 
-void AtomicFile::commit() {
+void AtomicFile::finish() {
+  if (finished_) return;
   target_->flush();
   if (!*target_) throw std::runtime_error(path_ + ": write failed");
+  if (out_.is_open()) out_.close();
+  if (!out_) throw std::runtime_error(path_ + ": write failed");
+  finished_ = true;
+}
+
+void AtomicFile::commit() {
+  finish();
   if (temp_path_.empty()) {
-    if (out_.is_open()) out_.close();
     committed_ = true;
     return;
   }
-  out_.close();
-  if (!out_) throw std::runtime_error(path_ + ": write failed");
   if (std::rename(temp_path_.c_str(), final_path_.c_str()) != 0) {
     throw std::runtime_error(path_ + ": cannot rename the finished file into place");
   }
@@ -166,7 +171,9 @@ void install_output_cleanup_on_signals() {
   struct sigaction action {};
   action.sa_handler = remove_temps_and_exit;
   sigemptyset(&action.sa_mask);
-  for (int signo : {SIGINT, SIGTERM, SIGHUP}) ::sigaction(signo, &action, nullptr);
+  // SIGPIPE too: `palpable run ... --trace - --events e.csv | head -1` was killed by it with
+  // e.csv.tmp-PID left behind.
+  for (int signo : {SIGINT, SIGTERM, SIGHUP, SIGPIPE}) ::sigaction(signo, &action, nullptr);
 }
 
 void check_distinct_outputs(const std::vector<std::pair<std::string, std::string>>& outputs) {
