@@ -228,10 +228,13 @@ struct Solver {
     }
     const double d = mf.face_eval(face, p);
     // An edge of V pointing toward F's plane (from either side) reduces |d|: F is not in VR(V).
-    const Vec3 n_v = dir_to(iv, mf.face_normal(face));
-    const Vec3& V = mv.vertex(v);
+    // The slope is computed exactly as the E-F state computes it, d(head) - d(tail) with both
+    // ends mapped into F's frame (d(tail) is d), so that the two states agree on its sign: for an
+    // edge parallel to F up to rounding, the normal dotted with the edge in V's frame (-7e-18
+    // where E-F saw 0) sent V-F to the edge and E-F back to V until the step limit
+    // (tests/fuzz/findings/engine_timeout_distance_steps.bin).
     for (const VoronoiPlane* q = mv.vertex_planes_begin(v); q != mv.vertex_planes_end(v); ++q) {
-      const double dd = n_v.dot(mv.head(q->neighbor.index) - V);
+      const double dd = mf.face_eval(face, to(iF, mv.head(q->neighbor.index))) - d;
       if ((d > 0.0 && dd < 0.0) || (d < 0.0 && dd > 0.0)) {
         f[iv] = q->neighbor;
         return Step::kContinue;

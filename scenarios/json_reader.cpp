@@ -157,10 +157,12 @@ Vec3 JsonReader::vec3(const json& value, const std::string& path) const {
 
 Vec3 JsonReader::direction(const json& value, const std::string& path) const {
   const Vec3 v = vec3(value, path);
-  if (!(v.norm() > 0.0) || !std::isfinite(v.norm())) {
+  // Any finite non-zero length: stableNorm does not square the components (1e200 or 1e-170).
+  const double length = v.stableNorm();
+  if (!(length > 0.0) || !std::isfinite(length)) {
     fail_value(path, value, "a non-zero direction [x, y, z]");
   }
-  return v.normalized();
+  return v / length;
 }
 
 Quat JsonReader::quaternion(const json& value, const std::string& path) const {

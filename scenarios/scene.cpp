@@ -142,11 +142,17 @@ std::shared_ptr<const Shape> parse_shape(const Reader& r, const json& value,
                "a halfspace is unbounded: only a fixed or kinematic body may have one");
       }
       r.only_keys(value, path, {"type", "normal", "offset"});
-      Vec3 n = r.vec3(r.required(value, path, "normal"), path + "/normal");
-      if (!(n.norm() > 0.0)) r.fail_value(path + "/normal", value["normal"], "a non-zero vector");
+      const Vec3 n = r.vec3(r.required(value, path, "normal"), path + "/normal");
+      // |n| without squaring the components: (9e190, 0, 1) squared overflows, and normalising by
+      // that infinity made the zero vector, a plane every body touched and none could meet
+      // (tests/fuzz/findings/engine_timeout_distance_steps.bin); (0, 0, 1e-170) underflows to 0.
+      const double length = n.stableNorm();
+      if (!(length > 0.0) || !std::isfinite(length)) {
+        r.fail_value(path + "/normal", value["normal"], "a non-zero vector");
+      }
       double offset = value.contains("offset") ? r.number(value["offset"], path + "/offset") : 0.0;
       // n . x <= offset with |n| != 1 is the same solid as n/|n| . x <= offset/|n|.
-      return std::make_shared<const Shape>(Halfspace{n.normalized(), offset / n.norm()});
+      return std::make_shared<const Shape>(Halfspace{n / length, offset / length});
     }
     if (type == "compound") {
       if (!allow_unbounded) {
@@ -403,6 +409,22 @@ void check_ranges(const Reader& r, const json& doc, const Scene& scene) {
     }
     if (kinematic && !(b.kinematic.point_W.norm() <= kMaxPosition)) {
       r.fail_value(motion + "/point", motion_at("point"), "a point within 1e9 m of the origin");
+    }
+    // The speed of the body's fastest point, not only of its centre: a platter (a halfspace)
+    // turning at 7e8 rad/s about a level axis, under the angular limit, moved the plane under the
+    // ball at 1e8 m/s, and the ball overlapped it at every other collision (found by
+    // fuzz_engine). A kinematic body turns about `point`; an unbounded one counts where the
+    // other bodies are (within `extent` of the origin).
+    const double reach = b.shape ? max_radius(*b.shape) : 0.0;
+    const Vec3 axis_point = kinematic ? b.kinematic.point_W : b.state.x_W;
+    const double lever = std::isfinite(reach) ? reach + (b.state.x_W - axis_point).norm()
+                                              : extent + axis_point.norm();
+    // (A lever that is not finite comes from a position out of range: that body's check names it.)
+    if (std::isfinite(lever) && !(v.norm() + w.norm() * lever <= kMaxSpeed)) {
+      r.fail_value(motion + "/angular_velocity", motion_at("angular_velocity"),
+                   "an angular speed that moves no point of the body faster than 1e6 m/s (at " +
+                       json(lever).dump() + " m from the axis: at most " +
+                       json((kMaxSpeed - v.norm()) / lever).dump() + " rad/s)");
     }
   }
   const json& settings = doc.contains("settings") ? doc["settings"] : json::object();

@@ -40,7 +40,7 @@ palpable::tools::CommandRegistration registration{
                      "contact frame: the hodographs of Routh and Stronge); written only when the "
                      "status is ok, atomically like run's files");
       return std::function<int()>([path, trajectory] {
-        if (*trajectory == "-") {
+        if (palpable::tools::names_descriptor(*trajectory) == 1) {  // "-", /dev/stdout
           throw palpable::InputError("--trajectory",
                                      "standard output carries the result; name a file");
         }

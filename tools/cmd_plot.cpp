@@ -1,5 +1,6 @@
 // palpable plot: PNG pictures of a trace (gnuplot).
 #include "tools/commands.hpp"
+#include "tools/lib/atomic_file.hpp"
 #include "tools/lib/exit_codes.hpp"
 #include "tools/lib/plot.hpp"
 
@@ -55,7 +56,8 @@ palpable::tools::CommandRegistration registration{
         options->kind = palpable::tools::parse_plot_kind(*kind);
         palpable::tools::plot_trace(*options);
         // With the PNG on standard output, the note goes to stderr.
-        (options->out_path == "-" ? std::cerr : std::cout) << "wrote " << options->out_path << "\n";
+        (palpable::tools::names_descriptor(options->out_path) == 1 ? std::cerr : std::cout)
+            << "wrote " << options->out_path << "\n";
         return palpable::tools::kExitOk;
       });
     }};

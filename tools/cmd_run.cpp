@@ -18,7 +18,6 @@ namespace {
 palpable::tools::CommandRegistration registration{
     "run", [](CLI::App& app) {
       auto options = std::make_shared<palpable::tools::RunOptions>();
-      auto summary_path = std::make_shared<std::string>();
       auto end = std::make_shared<double>(0.0);
       app.description(
           "Simulate a scene file (format palpable-scene/1, see scenarios/README.md) and print a\n"
@@ -46,40 +45,33 @@ palpable::tools::CommandRegistration registration{
                    "Without it such a run warns on stderr and exits 0.");
       auto* end_option =
           app.add_option("--end", *end, "End time [s], replacing the scene's end_time");
-      app.add_option("--summary-json", *summary_path,
+      app.add_option("--summary-json", options->summary_path,
                      "Write the summary (statistics, wall time, reference figures) as JSON");
-      return std::function<int()>([options, summary_path, end, end_option] {
+      return std::function<int()>([options, end, end_option] {
         if (end_option->count() > 0) options->end_time = *end;
         options->progress = ::isatty(2) != 0;
         options->keep_trace = false;  // memory flat in simulated time: stream, keep no history
         std::vector<std::pair<std::string, std::string>> outputs = {
             {"--trace", options->trace_path},
             {"--events", options->events_path},
-            {"--summary-json", *summary_path}};
+            {"--summary-json", options->summary_path}};
         // A trace written to a file gets a sidecar, TRACE.json: a fourth output.
         if (!options->trace_path.empty() && !palpable::tools::writes_through(options->trace_path)) {
           outputs.push_back({"the --trace sidecar", options->trace_path + ".json"});
         }
         palpable::tools::check_distinct_outputs(outputs);
-        // Opened before the run, so that an unwritable summary fails before any output is made.
-        std::unique_ptr<palpable::tools::AtomicFile> summary_file;
-        if (!summary_path->empty()) {
-          summary_file = std::make_unique<palpable::tools::AtomicFile>(*summary_path);
-        }
         palpable::tools::RunResult result = palpable::tools::run_scene(*options);
         // With an output streamed to standard output, the summary goes to stderr.
-        const bool stdout_taken =
-            options->trace_path == "-" || options->events_path == "-" || *summary_path == "-";
+        auto stdout_named = [](const std::string& path) {
+          return palpable::tools::names_descriptor(path) == 1;
+        };
+        const bool stdout_taken = stdout_named(options->trace_path) ||
+                                  stdout_named(options->events_path) ||
+                                  stdout_named(options->summary_path);
         (stdout_taken ? std::cerr : std::cout) << palpable::tools::summary_text(result);
         for (const std::string& trouble : palpable::tools::numerical_trouble(result.stats)) {
           std::cerr << "palpable: warning: " << options->scene_path << ": " << trouble
                     << ": the trace may be wrong\n";
-        }
-        if (summary_file) {
-          summary_file->stream() << palpable::tools::summary_json(result).dump(
-                                        2, ' ', false, nlohmann::json::error_handler_t::replace)
-                                 << "\n";
-          summary_file->commit();
         }
         return palpable::tools::kExitOk;
       });

@@ -30,7 +30,7 @@ std::string group_description(const std::string& group) {
 
 int main(int argc, char** argv) {
   using namespace palpable::tools;
-  // SIGINT, SIGTERM, SIGHUP: remove every temporary output file, exit 128 + signal.
+  // SIGINT, SIGTERM, SIGHUP, SIGPIPE: remove every temporary output file, exit 128 + signal.
   install_output_cleanup_on_signals();
   CLI::App app{
       "Palpable: impulse-based, event-driven rigid-body simulation with exact ballistic flight,\n"
@@ -40,7 +40,8 @@ int main(int argc, char** argv) {
       "Exit codes: 0 success; 1 the run failed; 2 bad input (command line, scene, spec), nothing\n"
       "run; 3 the run finished but a requested check did not hold.\n",
       "palpable"};
-  app.set_version_flag("--version", std::string("palpable ") + kVersion + " (git " + kGitCommit + ")");
+  app.set_version_flag("--version",
+                       std::string("palpable ") + kVersion + " (git " + kGitCommit + ")");
   app.require_subcommand(1);
   app.set_help_all_flag("--help-all", "Print help for every subcommand");
 

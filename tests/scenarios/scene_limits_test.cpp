@@ -88,3 +88,34 @@ TEST_CASE("a run whose clock stops advancing ends with an error naming the bodie
                     Catch::StartsWith("t = ") && Catch::Contains("clock stopped advancing") &&
                         Catch::Contains("\"ground\" and \"ball\""));
 }
+
+TEST_CASE("a halfspace normal too long or too short to square is normalised, not zeroed",
+          "[extremes][input][hostile][fuzz]") {
+  // tests/fuzz/findings/engine_timeout_distance_steps.bin set bowling's lane normal to
+  // (9e190, 0, 1): its squared length overflows, so normalising made (0, 0, 0) and the lane a
+  // plane no body could leave or enter; the pins fell through it. The normal is a direction of
+  // any finite length: here the plane x = 0, a wall the ball at the origin sits in.
+  auto normal_of = [](const Scene& scene) {
+    return std::get<Halfspace>(*scene.world.bodies[0].shape).normal_M;
+  };
+  nlohmann::json doc = ball_over_ground(0.5);
+  doc["bodies"][0]["shape"]["normal"] = {9.034376816953001e+190, 0, 1};
+  doc["bodies"][0]["shape"]["offset"] = 9.034376816953001e+190;  // x <= 1
+  Scene scene = scene_from_json(doc, "x.json");
+  CHECK(normal_of(scene).x() == 1.0);
+  CHECK(std::abs(normal_of(scene).z()) < 1e-190);
+  CHECK(std::get<Halfspace>(*scene.world.bodies[0].shape).offset == 1.0);
+  CHECK_THROWS_WITH(Simulation(scene.world, SimulationOptions{}),
+                    Catch::Contains("/bodies/1") && Catch::Contains("overlaps"));
+  // A length whose square underflows is a direction too.
+  doc["bodies"][0]["shape"]["normal"] = {0, 0, 1e-170};
+  doc["bodies"][0]["shape"]["offset"] = 0;
+  scene = scene_from_json(doc, "x.json");
+  CHECK(normal_of(scene) == Vec3::UnitZ());
+  Simulation(scene.world, SimulationOptions{}).run_until(0.5, nullptr);  // lands, no overlap
+  // A length past the largest double is not.
+  doc["bodies"][0]["shape"]["normal"] = {1.5e308, 1.5e308, 0};
+  CHECK_THROWS_WITH(scene_from_json(doc, "x.json"),
+                    Catch::Contains("x.json:/bodies/0/shape/normal") &&
+                        Catch::Contains("expected a non-zero vector"));
+}

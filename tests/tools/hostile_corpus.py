@@ -262,6 +262,13 @@ def still_device(path):
 case("--trace /dev/null", ["run", "s.json", "--trace", "/dev/null", "--events", "/dev/null"], 0,
      files={"s.json": scene()}, check=still_device("/dev/null"))
 case("--trace -", ["run", "s.json", "--trace", "-"], 0, "scene", files={"s.json": scene()})
+case("--trace /dev/stdout, a pipe", ["run", "s.json", "--trace", "/dev/stdout"], 0, "t,body,x",
+     files={"s.json": scene()})
+case("--trace a link to /dev/stdout, a pipe", ["run", "s.json", "--trace", "l.csv"], 0, "t,body,x",
+     files={"s.json": scene()}, links={"l.csv": "/dev/stdout"}, absent=["l.csv.json"],
+     check=lambda d: None if os.path.islink(os.path.join(d, "l.csv")) else "the link was replaced")
+case("--trace /dev/stdout and --events -", ["run", "s.json", "--trace", "/dev/stdout", "--events", "-"],
+     2, "--trace and --events", files={"s.json": scene()})
 case("--trace and --events one file", ["run", "s.json", "--trace", "x", "--events", "x"], 2,
      "--trace and --events", files={"s.json": scene()}, absent=["x"])
 case("--trace and --summary-json one file", ["run", "s.json", "--trace", "x", "--summary-json", "x"],

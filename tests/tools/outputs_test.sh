@@ -29,6 +29,28 @@ check "no temporary file left beside the target" "! ls target.csv.tmp-* >/dev/nu
 check "--trace - streams the CSV to stdout" "head -1 stdout.csv | grep -q '^t,body,x'"
 check "... and the summary goes to stderr" "grep -q '^scene' summary.txt"
 
+# /dev/stdout (a link to the descriptor) is standard output, as "-" is: through a pipe, and into a
+# file the shell opened - never replaced by a renamed file (`>> log` lost the log's content and the
+# summary went to the unlinked file), never "cannot resolve the symbolic link" (a pipe).
+"$palpable" run "$scenes/coins.json" --trace /dev/stdout 2>summary.txt | cat >piped.csv
+code=${PIPESTATUS[0]}
+check "--trace /dev/stdout into a pipe: exit 0" "[[ $code -eq 0 ]]"
+check "... streams the CSV" "head -1 piped.csv | grep -q '^t,body,x'"
+check "... and the summary goes to stderr" "grep -q '^scene' summary.txt"
+ln -s /dev/stdout stdout.link
+"$palpable" run "$scenes/coins.json" --trace stdout.link 2>/dev/null | cat >piped.csv
+code=${PIPESTATUS[0]}
+check "--trace LINK to /dev/stdout into a pipe: exit 0" "[[ $code -eq 0 ]]"
+check "... streams the CSV" "head -1 piped.csv | grep -q '^t,body,x'"
+check "... the link stays, no sidecar beside it" "[[ -L stdout.link && ! -e stdout.link.json ]]"
+echo precious >log.txt
+"$palpable" run "$scenes/coins.json" --trace /dev/stdout >>log.txt 2>summary.txt
+code=$?
+check "--trace /dev/stdout >> log: exit 0" "[[ $code -eq 0 ]]"
+check "... the log keeps what it held" "head -1 log.txt | grep -q '^precious$'"
+check "... and gains the trace after it" "sed -n 2p log.txt | grep -q '^t,body,x'"
+check "... the summary goes to stderr" "grep -q '^scene' summary.txt"
+
 "$palpable" run "$scenes/coins.json" --trace same.csv --events same.csv >/dev/null 2>err.txt
 code=$?
 check "one file as --trace and --events: exit 2" "[[ $code -eq 2 ]]"
@@ -63,6 +85,26 @@ code=$?
 check "SIGINT during a run: exit 130" "[[ $code -eq 130 ]]"
 check "... no temporary file left" "! ls long.csv.tmp-* >/dev/null 2>&1"
 check "... and no partial trace" "[[ ! -e long.csv ]]"
+
+# An output that fails as it is finished (/dev/full refuses every byte: a full disk) fails the run
+# before any other output is renamed into place: exit 1 and nothing left (the trace and its
+# sidecar stayed).
+if [[ -c /dev/full ]]; then
+  for option in --summary-json --events; do
+    "$palpable" run "$scenes/coins.json" --trace t.csv "$option" /dev/full >/dev/null 2>err.txt
+    code=$?
+    check "$option /dev/full: exit 1" "[[ $code -eq 1 ]]"
+    check "... naming it" "grep -q '/dev/full: write failed' err.txt"
+    check "... and no trace, sidecar or temporary left" "! ls t.csv* >/dev/null 2>&1"
+  done
+fi
+
+# The reader of standard output gone (SIGPIPE) while a file is being written beside it: exit 141,
+# no temporary left (e.csv.tmp-PID stayed).
+"$palpable" run "$scenes/bowling.json" --end 2 --trace - --events e.csv 2>/dev/null | head -1 >/dev/null
+code=${PIPESTATUS[0]}
+check "SIGPIPE on --trace - with --events e.csv: exit 141" "[[ $code -eq 141 ]]"
+check "... no temporary file left, no partial events" "! ls e.csv* >/dev/null 2>&1"
 
 # Each of SIGINT, SIGTERM and SIGHUP, two seconds into a long bowling run: exit 128 + signal, and
 # neither the temporary file nor a partial trace (nor its sidecar) is left. (--end 500 finishes in

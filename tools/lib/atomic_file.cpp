@@ -49,22 +49,63 @@ extern "C" void remove_temps_and_exit(int signo) {
 }
 
 bool is_special(const struct stat& st) {
-  return S_ISCHR(st.st_mode) || S_ISBLK(st.st_mode) || S_ISFIFO(st.st_mode) ||
-         S_ISSOCK(st.st_mode);
+  return S_ISCHR(st.st_mode) || S_ISBLK(st.st_mode) || S_ISFIFO(st.st_mode) || S_ISSOCK(st.st_mode);
+}
+
+// N when `path` ends in "/dev/fd/N", "/proc/self/fd/N" or "/proc/PID/fd/N" (this process).
+int descriptor_link(const std::string& path) {
+  if (path == "/dev/stdout") return 1;
+  if (path == "/dev/stderr") return 2;
+  for (const std::string& prefix : {std::string("/dev/fd/"), std::string("/proc/self/fd/"),
+                                    "/proc/" + std::to_string(::getpid()) + "/fd/"}) {
+    if (path.size() <= prefix.size() || path.compare(0, prefix.size(), prefix) != 0) continue;
+    const std::string digits = path.substr(prefix.size());
+    if (digits.size() > 6 || digits.find_first_not_of("0123456789") != std::string::npos) return -1;
+    return std::stoi(digits);
+  }
+  return -1;
 }
 
 }  // namespace
 
+int names_descriptor(const std::string& path) {
+  if (path == "-") return 1;
+  // Follow the links one at a time, stopping at a descriptor link: resolving that one as well
+  // gives "pipe:[1234]" (no path) or the file the shell opened, which a rename would replace.
+  std::filesystem::path p = path;
+  for (int hop = 0; hop < 40; ++hop) {
+    const int fd = descriptor_link(p.lexically_normal().string());
+    if (fd >= 0) return fd;
+    std::error_code ec;
+    if (!std::filesystem::is_symlink(std::filesystem::symlink_status(p, ec)) || ec) return -1;
+    const std::filesystem::path target = std::filesystem::read_symlink(p, ec);
+    if (ec) return -1;
+    p = target.is_absolute() ? target : p.parent_path() / target;
+  }
+  return -1;
+}
+
 bool writes_through(const std::string& path) {
-  if (path == "-") return true;
+  if (names_descriptor(path) >= 0) return true;
   struct stat st {};
   return ::stat(path.c_str(), &st) == 0 && is_special(st);
 }
 
 AtomicFile::AtomicFile(std::string path) : path_(std::move(path)), final_path_(path_) {
-  if (path_ == "-") {
+  const int fd = names_descriptor(path_);
+  if (fd == 1) {  // "-", /dev/stdout or a link to it: standard output, in order with the rest
     target_ = &std::cout;
     std::cout.precision(17);
+    return;
+  }
+  if (fd >= 0) {
+    // Another descriptor (/dev/stderr, /dev/fd/3): straight through, appended, never truncated
+    // or replaced - it may be a file the shell opened with >>.
+    out_.open(path_, std::ios::out | std::ios::app);
+    if (!out_) {
+      throw InputError(path_, std::string("cannot open for writing: ") + std::strerror(errno));
+    }
+    out_.precision(17);
     return;
   }
   struct stat st {};
@@ -103,16 +144,21 @@ AtomicFile::~AtomicFile() {
   unregister_temp(slot_);
 }
 
-void AtomicFile::commit() {
+void AtomicFile::finish() {
+  if (finished_) return;
   target_->flush();
   if (!*target_) throw std::runtime_error(path_ + ": write failed");
+  if (out_.is_open()) out_.close();
+  if (!out_) throw std::runtime_error(path_ + ": write failed");
+  finished_ = true;
+}
+
+void AtomicFile::commit() {
+  finish();
   if (temp_path_.empty()) {
-    if (out_.is_open()) out_.close();
     committed_ = true;
     return;
   }
-  out_.close();
-  if (!out_) throw std::runtime_error(path_ + ": write failed");
   if (std::rename(temp_path_.c_str(), final_path_.c_str()) != 0) {
     throw std::runtime_error(path_ + ": cannot rename the finished file into place");
   }
@@ -125,7 +171,9 @@ void install_output_cleanup_on_signals() {
   struct sigaction action {};
   action.sa_handler = remove_temps_and_exit;
   sigemptyset(&action.sa_mask);
-  for (int signo : {SIGINT, SIGTERM, SIGHUP}) ::sigaction(signo, &action, nullptr);
+  // SIGPIPE too: `palpable run ... --trace - --events e.csv | head -1` was killed by it with
+  // e.csv.tmp-PID left behind.
+  for (int signo : {SIGINT, SIGTERM, SIGHUP, SIGPIPE}) ::sigaction(signo, &action, nullptr);
 }
 
 void check_distinct_outputs(const std::vector<std::pair<std::string, std::string>>& outputs) {
@@ -137,10 +185,13 @@ void check_distinct_outputs(const std::vector<std::pair<std::string, std::string
       std::error_code ec1, ec2;
       const auto ca = std::filesystem::weakly_canonical(a, ec1);
       const auto cb = std::filesystem::weakly_canonical(b, ec2);
-      const bool same = a == b || (!ec1 && !ec2 && ca == cb);
+      const int fd_a = names_descriptor(a);
+      const bool same =
+          a == b || (fd_a >= 0 && fd_a == names_descriptor(b)) || (!ec1 && !ec2 && ca == cb);
       if (!same) continue;
       struct stat st {};
-      if (a != "-" && ::stat(a.c_str(), &st) == 0 && is_special(st)) continue;  // /dev/null twice
+      // /dev/null twice is fine; one descriptor ("-", /dev/stdout) twice would interleave.
+      if (fd_a < 0 && ::stat(a.c_str(), &st) == 0 && is_special(st)) continue;
       throw InputError(outputs[i].first + " and " + outputs[j].first,
                        "both name \"" + a + "\": give each output its own file");
     }

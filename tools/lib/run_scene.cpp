@@ -9,11 +9,11 @@
 
 #include <chrono>
 #include <cmath>
-#include <initializer_list>
 #include <cstdint>
 #include <cstdio>
 #include <ctime>
 #include <fstream>
+#include <initializer_list>
 #include <iomanip>
 #include <iostream>
 #include <memory>
@@ -165,7 +165,8 @@ std::string phases_text(const EventRow& row) {
   return out.str();
 }
 
-void write_event_row(std::ostream& out, const EventRow& row, const std::vector<std::string>& names) {
+void write_event_row(std::ostream& out, const EventRow& row,
+                     const std::vector<std::string>& names) {
   auto number = [&out](double x) {
     out << ',';
     put_number(out, x);
@@ -253,6 +254,11 @@ RunResult run_scene(const RunOptions& options) {
   std::unique_ptr<AtomicFile> trace_file, events_file;
   if (!options.trace_path.empty()) trace_file = std::make_unique<AtomicFile>(options.trace_path);
   if (!options.events_path.empty()) events_file = std::make_unique<AtomicFile>(options.events_path);
+  // Opened before the run, so that an unwritable summary fails before anything runs.
+  std::unique_ptr<AtomicFile> summary_file;
+  if (!options.summary_path.empty()) {
+    summary_file = std::make_unique<AtomicFile>(options.summary_path);
+  }
   RunObserver observer(scene.world, trace_file.get(), events_file.get(), &result.trace,
                        options.keep_trace || !scene.reference.is_null(),
                        options.keep_events ? &result.events : nullptr);
@@ -314,9 +320,21 @@ RunResult run_scene(const RunOptions& options) {
                                                 nlohmann::json::error_handler_t::replace)
                       << "\n";
   }
-  if (trace_file) trace_file->commit();
-  if (events_file) events_file->commit();
-  if (sidecar) sidecar->commit();
+  if (summary_file) {
+    summary_file->stream() << summary_json(result).dump(2, ' ', false,
+                                                        nlohmann::json::error_handler_t::replace)
+                           << "\n";
+  }
+  // All or none: every output is written out and checked before the first is renamed into
+  // place (a summary on a full disk left the trace committed and the run failed).
+  const std::vector<AtomicFile*> outputs = {trace_file.get(), events_file.get(), sidecar.get(),
+                                            summary_file.get()};
+  for (AtomicFile* file : outputs) {
+    if (file) file->finish();
+  }
+  for (AtomicFile* file : outputs) {
+    if (file) file->commit();
+  }
   return result;
 }
 

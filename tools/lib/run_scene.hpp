@@ -39,7 +39,9 @@ struct EventRow {
   Vec3 resumed_direction_W = Vec3::Zero();
   Vec3 slip_before_W = Vec3::Zero(), slip_after_W = Vec3::Zero();
   double normal_impulse_compression = 0.0, normal_impulse_restitution = 0.0;
-  PhaseKind phase(int i) const { return static_cast<PhaseKind>(phases[static_cast<std::size_t>(i)]); }
+  PhaseKind phase(int i) const {
+    return static_cast<PhaseKind>(phases[static_cast<std::size_t>(i)]);
+  }
 };
 EventRow event_row(const CollisionRecord& record);
 EventRow event_row(const ModeChange& change);
@@ -59,6 +61,7 @@ struct RunOptions {
   std::optional<double> end_time;      // replaces the scene's end_time
   std::string trace_path;              // empty: no trace file
   std::string events_path;             // empty: no events file
+  std::string summary_path;            // empty: no summary JSON (summary_json) file
   bool progress = false;               // progress on stderr
   // Numerical trouble (see numerical_trouble) fails the run: it throws and writes no file.
   bool strict = false;
@@ -74,7 +77,7 @@ struct RunResult {
   SimulationStats stats;
   double wall_time_s = 0.0;
   double cpu_time_s = 0.0;
-  Trace trace;               // the samples, in memory (see RunOptions::keep_trace)
+  Trace trace;  // the samples, in memory (see RunOptions::keep_trace)
   // Every event row (see RunOptions::keep_events); a deque: no copying as it grows, and its
   // blocks come from the heap, reused by the next run instead of faulted in afresh.
   std::deque<EventRow> events;
