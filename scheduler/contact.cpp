@@ -651,7 +651,8 @@ Resolution resolve(Contact c, const ContactSide& side1, const ContactSide& side2
   out.energy_allowance = settings.integration_tolerance * p_norm * std::abs(pass.u0_c.z());
   if (c.g_n > 0.0 && options.microcollisions) {
     const double slack = 1.0 + settings.microcollision_speed_slack;
-    const double m_red = 1.0 / (c.body1.inv_mass + c.body2.inv_mass);
+    // A stack carried by the microcollision (riders) leaves with its whole mass.
+    const double m_red = carried ? stack_mass : 1.0 / (c.body1.inv_mass + c.body2.inv_mass);
     const Vec3 u_after = pass.result.u_final_c;
     out.energy_allowance += std::max(0.5 * p_norm * c.v_micro * slack,
                                      0.5 * m_red * u_after.squaredNorm() * slack * slack);
