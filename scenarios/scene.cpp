@@ -100,19 +100,15 @@ std::shared_ptr<const Shape> parse_shape(const Reader& r, const json& value,
       }
       return std::make_shared<const Shape>(make_ellipsoid(a));
     }
-    if (type == "cylinder") {
-      r.only_keys(value, path, {"type", "radius", "half_height"});
+    if (type == "cylinder" || type == "capsule") {
+      // A radius and a length along z, neither below kMinAspect of the other.
+      const char* length_key = type == "cylinder" ? "half_height" : "half_length";
+      r.only_keys(value, path, {"type", "radius", length_key});
       const double radius = size("radius", 0.0);
-      const double half_height = size("half_height", radius);
-      if (radius < kMinAspect * half_height) size("radius", half_height);
-      return std::make_shared<const Shape>(make_cylinder(radius, half_height));
-    }
-    if (type == "capsule") {
-      r.only_keys(value, path, {"type", "radius", "half_length"});
-      const double radius = size("radius", 0.0);
-      const double half_length = size("half_length", radius);
-      if (radius < kMinAspect * half_length) size("radius", half_length);
-      return std::make_shared<const Shape>(make_capsule(radius, half_length));
+      const double length = size(length_key, radius);
+      if (radius < kMinAspect * length) size("radius", length);
+      if (type == "cylinder") return std::make_shared<const Shape>(make_cylinder(radius, length));
+      return std::make_shared<const Shape>(make_capsule(radius, length));
     }
     if (type == "loaded_ball") {
       r.only_keys(value, path, {"type", "radius", "com_offset"});

@@ -147,6 +147,8 @@ struct Pass {
   bool micro = false;      // a microcollision
   CollisionResult result;  // stage 2
   Vec3 p_W = Vec3::Zero();
+  // A face on a dynamic face: the pair's response with the relative rotation held (else unset).
+  HeldRotationResponse stack;
   int steps = 0;        // Runge-Kutta steps (of the failed integration, if it failed)
   bool failed = false;  // integration failed: the frictionless impulse stands in
 };
@@ -169,7 +171,8 @@ Pass impulse_pass(const Contact& c, const ContactSide& side1, const ContactSide&
   // The same frame problem as impulse/'s resolve_collision (its tests are this path's tests).
   FrameProblem problem = frame_problem(pass.cb1, pass.cb2, R_WC);
   if (c.placement == Placement::kFace && c.dynamic == DynamicSide::kBoth) {
-    problem.K_c = R_WC.transpose() * stack_response(c).K_W * R_WC;
+    pass.stack = stack_response(c);
+    problem.K_c = R_WC.transpose() * pass.stack.K_W * R_WC;
   }
   const Mat3& K_c = problem.K_c;
   pass.u0_c = problem.u0_c;
@@ -229,7 +232,8 @@ struct PressureLocation {
   Vec3 to_W = Vec3::Zero();
 };
 
-PressureLocation locate_pressure(const Contact& c, const Vec3& p_W, bool first_pass) {
+PressureLocation locate_pressure(const Contact& c, const Pass& pass, bool first_pass) {
+  const Vec3& p_W = pass.p_W;
   PressureLocation at;
   at.pressure_W = c.point_W;
   const Vec3& x_D = c.dynamic_x_W();
@@ -256,7 +260,7 @@ PressureLocation locate_pressure(const Contact& c, const Vec3& p_W, bool first_p
     // off the contact point by s with p_n (s x n) = L's in-plane part: s = n x L / p_n.
     // (From body 2's side, -I2 dw - r2 x p, if body 1's rotation is held by its own support.)
     const double pn = p_W.dot(c.n_W);
-    const Vec3 dw = stack_response(c).W * p_W;
+    const Vec3 dw = pass.stack.W * p_W;
     const Vec3 couple = !c.rotation_held1 ? Vec3(c.body1.inv_inertia_W.inverse() * dw -
                                                  c.body1.r_W.cross(p_W))
                         : !c.rotation_held2 ? Vec3(-(c.body2.inv_inertia_W.inverse() * dw) -
@@ -547,7 +551,7 @@ Resolution resolve(Contact c, const ContactSide& side1, const ContactSide& side2
     pass = impulse_pass(c, side1, side2, material, settings, stack_mass, options);
     out.integration_steps += pass.steps;
     if (pass.failed) ++out.impulse_failures;
-    at = locate_pressure(c, pass.p_W, round == 0);
+    at = locate_pressure(c, pass, round == 0);
     if (!at.move) break;
     if (at.tip) {
       place_tipping(c, at.to_W, side1.state, side2.state);
@@ -577,7 +581,7 @@ Resolution resolve(Contact c, const ContactSide& side1, const ContactSide& side2
   ContactBody& cb2 = pass.cb2;
   if (c.placement == Placement::kFace && c.dynamic == DynamicSide::kBoth) {
     // The patch holds the relative rotation: both bodies turn alike (held_rotation_response).
-    const Vec3 dw = stack_response(c).W * pass.p_W;
+    const Vec3 dw = pass.stack.W * pass.p_W;
     cb1.v_W += cb1.inv_mass * pass.p_W;
     cb2.v_W -= cb2.inv_mass * pass.p_W;
     cb1.w_W += dw;
