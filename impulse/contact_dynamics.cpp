@@ -592,6 +592,29 @@ HeldViolation worst_violation(const std::vector<HeldContact>& contacts, const He
   return worst;
 }
 
+namespace {
+
+// The contact let go by this choice whose gap closes fastest under the solution (its gap
+// acceleration below -tolerance times the scale), or -1; none of `returned` (brought back once
+// already).
+int closing_released(const std::vector<HeldContact>& contacts, const HeldModes& modes,
+                     double acceleration_scale, double tolerance, const std::vector<int>& returned) {
+  int closing = -1;
+  double fastest = -tolerance * acceleration_scale;
+  for (int i : modes.released) {
+    if (std::find(returned.begin(), returned.end(), i) != returned.end()) continue;
+    const std::size_t k = static_cast<std::size_t>(i);
+    const double gap_acceleration = modes.solution.motion[k].slip_rate_W.dot(contacts[k].n_W);
+    if (gap_acceleration < fastest) {
+      fastest = gap_acceleration;
+      closing = i;
+    }
+  }
+  return closing;
+}
+
+}  // namespace
+
 HeldModes choose_held_modes(const std::vector<HeldBody>& bodies, std::vector<HeldContact>& contacts,
                             double still, double tolerance) {
   HeldModes out;
@@ -610,11 +633,32 @@ HeldModes choose_held_modes(const std::vector<HeldBody>& bodies, std::vector<Hel
     if (!c.roll_sticks) c.roll_dir = rolling.normalized();
   }
   const int budget = 8 + 4 * static_cast<int>(contacts.size());
+  // Gap accelerations are judged against the largest applied acceleration (gravity's, usually).
+  double acceleration_scale = 0.0;
+  for (const HeldBody& b : bodies) {
+    acceleration_scale = std::max(acceleration_scale, b.force_W.norm() / b.mass);
+  }
+  if (!(acceleration_scale > 0.0)) acceleration_scale = 1.0;
+  std::vector<int> returned;  // contacts brought back, once each (no cycling between two sets)
   for (;;) {
     out.solution = solve_held(bodies, contacts);
     if (out.solution.status != HeldStatus::kOk) return out;
     const HeldViolation v = worst_violation(contacts, out.solution, tolerance);
-    if (v.kind == HeldViolation::Kind::kNone) return out;
+    if (v.kind == HeldViolation::Kind::kNone) {
+      // A contact let go earlier must not close now: the friction or the pressure that made it
+      // pull may since have changed mode. The one closing fastest comes back (an active set).
+      const int back = closing_released(contacts, out, acceleration_scale, tolerance, returned);
+      if (back < 0) return out;
+      if (out.changes >= budget) {
+        out.converged = false;
+        return out;
+      }
+      ++out.changes;
+      contacts[static_cast<std::size_t>(back)].active = true;
+      returned.push_back(back);
+      out.released.erase(std::find(out.released.begin(), out.released.end(), back));
+      continue;
+    }
     if (out.changes >= budget) {
       out.converged = false;
       return out;

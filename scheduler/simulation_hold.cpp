@@ -163,8 +163,13 @@ void Simulation::Impl::replan(std::uint32_t i, double t) {
       PairSet::Pair& q = pairs.pair(pair);
       q.held = false;
       q.lifted = true;
-      q.last_collision_t = t;
-      q.collisions_at_t = 0;
+      // Let go at the instant of its own collision, it keeps its count there: a hold that lets
+      // go at once and collides again moves through the rounds of collide_or_hold (and at last
+      // the retry limit) instead of looping at one instant.
+      if (q.last_collision_t != t) {
+        q.last_collision_t = t;
+        q.collisions_at_t = 0;
+      }
       report("release", q.a, q.b, body(q.a).state.x_W, t);
     }
     bool changed = false;

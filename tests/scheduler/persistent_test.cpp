@@ -330,3 +330,44 @@ TEST_CASE("persistent: a box on a sliding block stops with it at the closed-form
     CHECK(end.x_W.x() == Approx(0.5 / (0.3 * kG)).margin(1e-9));
   }
 }
+
+TEST_CASE("persistent: a ball rolling beside a wall it touches keeps its line and costs nothing",
+          "[scheduler][persistent]") {
+  // A ball rolls along a wall, within the target gap of it (a ball at the bottom of a dish, beside
+  // its wall): nothing draws them together, so the pair is never re-checked at the progress
+  // floor, the ball's distance from the wall does not change, and rolling resistance stops it at
+  // the closed-form point, v0^2 / (2 a) with a = 5 d g / (7 R). The scene is turned about the
+  // vertical, so that rounding leaves the ball's deceleration a closing component of ~1e-17
+  // along the wall's normal (what re-checked such a pair at the floor, 1e6 times a second).
+  const double R = 0.05, d = 1e-3, v0 = 0.5;
+  for (double turn : {0.0, 0.3, 1.1}) {
+    for (double gap : {0.0, 1e-5, 5e-5}) {
+      CAPTURE(turn, gap);
+      const Quat q = test::about(Vec3::UnitZ(), turn);
+      const Vec3 along = q * Vec3::UnitY(), out = q * Vec3::UnitX();
+      World world;
+      world.settings = persistent();
+      Material m{0.5, 0.0};
+      m.rolling_resistance = d;
+      world.default_material = m;
+      world.add(test::fixed_ground("table"));
+      // A box, not a halfspace: the pair's bound is the general conservative one (a sphere on
+      // a plane has an exact one).
+      world.add(test::fixed_body("wall", ConvexPolyhedron::box(Vec3(0.1, 2.0, 0.5)),
+                                 1.1 * out + Vec3(0, 0, 0.5), q));
+      const Vec3 x0 = (1.0 - R - gap) * out + Vec3(0, 0, R);
+      world.add(test::sphere_body("ball", R, 1.0, x0, v0 * along, -v0 / R * out));
+      Simulation sim(world, SimulationOptions{0.01});
+      Modes rec;
+      sim.run_until(4.0, &rec);
+      const double a = 5.0 * d * kG / (7.0 * R);
+      REQUIRE(rec.first("roll_stop"));
+      CHECK(rec.first("roll_stop")->t == Approx(v0 / a).margin(1e-9));
+      const BodyState end = sim.state_at(BodyId{2}, 4.0);
+      CHECK(std::abs((end.x_W - x0).dot(out)) < 1e-15);
+      CHECK((end.x_W - x0).dot(along) == Approx(v0 * v0 / (2.0 * a)).margin(1e-9));
+      CHECK(sim.stats().floored_bounds == 0);
+      CHECK(sim.stats().events < 1000);
+    }
+  }
+}
