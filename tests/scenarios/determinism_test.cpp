@@ -62,6 +62,7 @@ const Expected kExpected[] = {
     {"bowling.json", 0x0ac28b1558ff64ecull},
     {"chain_of_balls.json", 0x77e5ac8fe4550a70ull},
     {"coins.json", 0x882f15f6c0fdb34bull},
+    {"cylinder_rolling_slope.json", 0xdcd448b0967314f3ull},
     {"pool_break.json", 0x412f2ba6c63bad8aull},
     {"sphere_slide_to_roll.json", 0x8d0cc90c21d15ce4ull},
 };
