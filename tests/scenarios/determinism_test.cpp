@@ -65,6 +65,7 @@ const Expected kExpected[] = {
     {"cylinder_rolling_slope.json", 0xdcd448b0967314f3ull},
     {"eulers_disk.json", 0x4661aa5e1f938a27ull},
     {"pool_break.json", 0x412f2ba6c63bad8aull},
+    {"rattleback.json", 0x62b720820bc2ac9full},
     {"rolling_coin.json", 0x953d42cf719519d2ull},
     {"sphere_slide_to_roll.json", 0x8d0cc90c21d15ce4ull},
     {"tippe_top.json", 0x339205ea28cbdc66ull},

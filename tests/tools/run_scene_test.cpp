@@ -178,15 +178,17 @@ double mechanical_energy(const palpable::World& world, std::size_t i, const Body
 }  // namespace
 
 TEST_CASE("the rolling classics on their rims and balls run clean", "[tools][run][scene][smooth]") {
-  // scenarios/eulers_disk.json, rolling_coin.json and tippe_top.json: a rim or a ball touching a
-  // table at a point, which neither contact model holds yet, so each is a train of microcollisions
-  // (what they do against their closed forms is measured in scenarios/README.md). Checked here
-  // only what must hold whatever the contact model: no overlap or failed query, finite states,
-  // every sample on or above the table. The coin and the top also never gain more energy than
-  // the microcollision floor lends (1/2 m v_micro^2); Euler's disk does (up to 7 times that, +2.9
+  // scenarios/eulers_disk.json, rolling_coin.json, tippe_top.json and rattleback.json: a rim, a
+  // ball or an ellipsoid touching a table at a point, which neither contact model holds yet, so
+  // each is a train of microcollisions (what they do against their closed forms is measured in
+  // scenarios/README.md). Checked here only what must hold whatever the contact model: no overlap
+  // or failed query, finite states, every sample on or above the table. The coin, the top and the
+  // spun rattleback also never gain more energy than the microcollision floor lends (1/2 m
+  // v_micro^2); Euler's disk does (up to 7 times that, +2.9
   // %, measured on the 2 s run: the drift-free target pumps energy into a rim rolling in a tight
   // circle; reported, not asserted).
-  for (const char* name : {"eulers_disk.json", "rolling_coin.json", "tippe_top.json"}) {
+  for (const char* name :
+       {"eulers_disk.json", "rolling_coin.json", "tippe_top.json", "rattleback.json"}) {
     CAPTURE(name);
     RunOptions options;
     options.scene_path = scene(name);
