@@ -755,6 +755,47 @@ Island::PlanResult Island::plan(World& world, const std::vector<const ShapeGeome
     // What separates faster than a microcollision would rebound lets go; slower is held (the
     // hand-over rule of a collision, DESIGN.md §8.1).
     const double separation = microcollision_speed(settings, world.gravity_W.norm());
+    // A face that lifts off on one side while an edge of it stays down, on a body that would tip
+    // about that edge anyway (the centre of pressure the whole face would need lies beyond it),
+    // keeps only that edge: a prism rolling down a slope lands on its next face turning about the
+    // leading edge, and holding the whole face would take an impulse pulling the rising side down,
+    // which a contact cannot give - it would stop the prism dead at every face. (On a face it can
+    // stand on, the rocking is a landing's remainder, taken out by the projection below, as
+    // before.)
+    if (cause.kind != IslandEvent::Kind::kTip) {
+      const std::vector<HeldContactMotion> now = held_velocities(p.bodies, p.contacts);
+      const HeldSolution statics = solve_held(p.bodies, p.contacts);
+      for (std::size_t i = 0; i < p.contacts.size(); ++i) {
+        HeldContact& c = p.contacts[i];
+        if (!c.active || c.patch != PatchKind::kPolygon || c.mover < 0) continue;
+        const std::size_t n = c.polygon.size();
+        std::vector<double> rise(n);
+        double highest = -kInfinity;
+        for (std::size_t k = 0; k < n; ++k) {
+          const Vec3 r = c.polygon[k].x() * c.t1_W + c.polygon[k].y() * c.t2_W;
+          rise[k] = (now[i].slip_W + now[i].dw_W.cross(r)).dot(c.n_W);
+          highest = std::max(highest, rise[k]);
+        }
+        int edge = -1;
+        double lowest = kInfinity;
+        for (std::size_t k = 0; k < n; ++k) {
+          const double edge_rise = std::max(rise[k], rise[(k + 1) % n]);
+          if (edge_rise < lowest) {
+            lowest = edge_rise;
+            edge = static_cast<int>(k);
+          }
+        }
+        if (edge < 0 || !(lowest <= still)) continue;
+        const Vec2& a = c.polygon[static_cast<std::size_t>(edge)];
+        const Vec2 d = c.polygon[(static_cast<std::size_t>(edge) + 1) % n] - a;
+        const bool tips = statics.status == HeldStatus::kOk &&
+                          cross2(d, statics.forces[i].centre_of_pressure - a) < 0.0;
+        if (!(tips && highest > still)) continue;
+        if (!forced) before = p.contacts;
+        reduce_patch(c, edge);
+        forced = true;
+      }
+    }
     result.projection_energy +=
         project_held_velocities(p.bodies, p.contacts, still, separation, &separating);
     for (std::size_t k = 0; k < bodies.size(); ++k) {

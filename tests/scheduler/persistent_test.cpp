@@ -507,3 +507,67 @@ TEST_CASE("persistent: a cylinder rolls down a box ramp's face and leaves it at 
   const double t_edge = rec.times[first] + (-v1 + std::sqrt(v1 * v1 + 2.0 * a * s_left)) / a;
   CHECK(edge->t == Approx(t_edge).margin(1e-9));
 }
+
+TEST_CASE("persistent: an n-gon prism rolling down a slope keeps turning at each landing",
+          "[scheduler][persistent][smooth]") {
+  // A 64- and a 128-gon prism (circumradius L = 0.05 m) from rest on a face across 10 degrees,
+  // mu 1, e 0: it tips over its downhill edge and lands on the next face turning about the new
+  // leading edge, which an inelastic impact leaves at w+ = w- (I_c + m L^2 cos(2 pi / n)) /
+  // (I_c + m L^2): the rimless wheel (McGeer 1990), integrated here. Holding each new face whole
+  // would stop the prism at every landing (the trailing edge it lifts would have to be pulled
+  // down); measured before that was mended, 62 % (64-gon) and 72 % (128-gon) short of the rimless
+  // wheel at 0.5 s; now within 0.6 %. Asked: 1 % at 0.5 s. Later the landings fall behind (-22 %
+  // and -28 % at 1 s): each landing impulse acts at one corner of the landing edge (the corner
+  // landing first, scheduler/contact.cpp), which yaws the prism and lets it slip.
+  const double th = 10.0 * kPi / 180.0, L = 0.05;
+  const Vec3 n(std::sin(th), 0.0, std::cos(th)), down(std::cos(th), 0.0, -std::sin(th));
+  for (const int sides : {64, 128}) {
+    CAPTURE(sides);
+    const double a = kPi / sides;
+    World world;
+    world.settings = persistent();
+    world.default_material = Material{1.0, 0.0};
+    world.add(test::fixed_body("slope", make_halfspace(n, 0.0)));
+    // A face down: the face between vertices 0 and 1 (normal at angle a in the prism's plane)
+    // turned to -n, the axis along y.
+    const Quat q = test::about(Vec3::UnitY(), th) * test::about(Vec3::UnitX(), kPi / 2) *
+                   test::about(Vec3::UnitZ(), -kPi / 2 - a);
+    world.add(test::dynamic_body("prism", ConvexPolyhedron::prism(L, 0.05, sides), 1.0,
+                                 (L * std::cos(a) + 1e-12) * n, q));
+    Simulation sim(world, SimulationOptions{0.01});
+    test::Recorder rec;
+    sim.run_until(0.5, &rec);
+    CHECK(sim.stats().penetrations == 0);
+    const double s_sim = down.dot(rec.samples.back()[1].x_W - rec.samples.front()[1].x_W);
+    // The rimless wheel: the pivot angle psi of the centre from the normal through the downhill
+    // vertex, (I_c + m L^2) psi'' = m g L sin(psi + theta), from -a to a, then w *= ratio.
+    const double ic = L * L * (1.0 + 2.0 * std::cos(a) * std::cos(a)) / 6.0;  // per unit mass
+    const double j = ic + L * L, ratio = (ic + L * L * std::cos(2.0 * a)) / j;
+    auto f = [&](double psi) { return kG * L * std::sin(psi + th) / j; };
+    double psi = -a, w = 0.0, pivot = 0.0, t = 0.0;
+    const double h = 1e-6;
+    while (t < 0.5 - 1e-12) {
+      const double step = std::min(h, 0.5 - t);
+      const double k1p = w, k1w = f(psi);
+      const double k2p = w + 0.5 * step * k1w, k2w = f(psi + 0.5 * step * k1p);
+      const double k3p = w + 0.5 * step * k2w, k3w = f(psi + 0.5 * step * k2p);
+      const double k4p = w + step * k3w, k4w = f(psi + step * k3p);
+      const double psi_new = psi + step / 6.0 * (k1p + 2.0 * k2p + 2.0 * k3p + k4p);
+      const double w_new = w + step / 6.0 * (k1w + 2.0 * k2w + 2.0 * k3w + k4w);
+      if (psi_new >= a) {
+        const double frac = (a - psi) / (psi_new - psi);
+        t += frac * step;
+        w = (w + frac * (w_new - w)) * ratio;
+        psi = -a;
+        pivot += 2.0 * L * std::sin(a);
+      } else {
+        psi = psi_new;
+        w = w_new;
+        t += step;
+      }
+    }
+    const double s_rimless = pivot + L * std::sin(psi) + L * std::sin(a);
+    CAPTURE(s_sim, s_rimless);
+    CHECK(std::abs(s_sim / s_rimless - 1.0) < 0.01);
+  }
+}
