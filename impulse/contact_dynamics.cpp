@@ -92,14 +92,17 @@ Kinematics kinematics(const HeldContact& c, const std::vector<HeldBody>& bodies)
   k.dw = k.m.w - k.s.w;
   const Mat3 I = Mat3::Identity();
   // The mover's contact point: a material point of a polyhedron, whose acceleration is
-  // a + alpha x r + w x (w x r); or a sphere's lowest point c - R n, which rolls over its
-  // surface: d/dt (v + w x (-R n)) = a + R n x alpha - R w x dn/dt.
+  // a + alpha x r + w x (w x r); or a rounded body's point c = q - R n under its core point q
+  // (q - x = r_q material: a sphere's centre, r_q = 0; a point of a lying cylinder's axis), which
+  // rolls over its surface: d/dt (v + w x (r_q - R n)) = a + alpha x (r_q - R n) + w x (w x r_q)
+  // - R w x dn/dt.
   Vec3 p_dot;  // velocity of the contact point itself
   k.Jm.leftCols<3>() = I;
   if (c.sphere_radius > 0.0) {
-    k.Jm.rightCols<3>() = c.sphere_radius * skew(c.n_W);
-    k.slip_bias = -c.sphere_radius * k.m.w.cross(k.n_dot);
-    p_dot = k.m.v - c.sphere_radius * k.n_dot;
+    const Vec3& r_q = c.core_offset_W;
+    k.Jm.rightCols<3>() = c.sphere_radius * skew(c.n_W) - skew(r_q);
+    k.slip_bias = k.m.w.cross(k.m.w.cross(r_q)) - c.sphere_radius * k.m.w.cross(k.n_dot);
+    p_dot = k.m.v + k.m.w.cross(r_q) - c.sphere_radius * k.n_dot;
   } else {
     k.Jm.rightCols<3>() = -skew(k.r_m);
     k.slip_bias = k.m.w.cross(k.m.w.cross(k.r_m));

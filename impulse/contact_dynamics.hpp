@@ -77,7 +77,13 @@ struct HeldContact {
   Vec3 c_W = Vec3::Zero();  // reference point, on the support's surface [m]
   Vec3 n_W = Vec3::UnitZ();
   Vec3 t1_W = Vec3::UnitX(), t2_W = Vec3::UnitY();
-  double sphere_radius = 0.0;  // > 0: the mover is a sphere of this radius touching at c
+  // > 0: the mover is rounded, the surface at this distance from a core of its own: a sphere
+  // (core: its centre) touching at c, or a cylinder or capsule lying on its side (core: its axis)
+  // touching along the patch's segment. Its contact point is not a material point: it stays under
+  // the core, c + R n, whichever way the body rolls.
+  double sphere_radius = 0.0;
+  // A rounded mover's core point above c, c + R n, from its centre of mass (zero for a sphere).
+  Vec3 core_offset_W = Vec3::Zero();
   // The normal's rate when it does not simply turn with the support (two spheres, a sphere on an
   // edge, an edge across an edge: the normal follows the closest points of two features).
   bool has_n_dot = false;

@@ -259,6 +259,28 @@ void parse_settings(const Reader& r, const json& value, const std::string& path,
   }
 }
 
+// A body's inertia about its centre of mass in its modelling frame [kg m^2]: [I1, I2, I3], the
+// principal moments along x, y, z, or a symmetric 3 x 3 matrix [[Ixx, Ixy, Ixz], [..], [..]] whose
+// products of inertia turn the principal axes (its positive definiteness and the triangle
+// inequality are checked by mass_properties_from_inertia).
+Mat3 parse_inertia(const Reader& r, const json& value, const std::string& path) {
+  if (value.is_array() && value.size() == 3 && value[0].is_array()) {
+    Mat3 I;
+    for (int i = 0; i < 3; ++i) {
+      I.row(i) = r.vec3(value[static_cast<std::size_t>(i)], path + "/" + std::to_string(i));
+    }
+    return I;
+  }
+  const Vec3 d = r.vec3(value, path);
+  for (int i = 0; i < 3; ++i) {
+    if (!(d[i] > 0.0)) {
+      r.fail_value(path + "/" + std::to_string(i), value[static_cast<std::size_t>(i)],
+                   "a positive principal moment");
+    }
+  }
+  return d.asDiagonal();
+}
+
 Body parse_body(const Reader& r, const json& value, const std::string& path) {
   r.object(value, path);
   r.only_keys(value, path,
@@ -301,26 +323,32 @@ Body parse_body(const Reader& r, const json& value, const std::string& path) {
       r.fail(path, has_mass ? "give either \"mass\" or \"density\", not both"
                             : "missing \"mass\" (kg) or \"density\" (kg/m^3) of a dynamic body");
     }
+    // Uniform density fixes the inertia of every shape but two: a loaded ball (its centre of mass
+    // is off its centre) must be given its inertia, and an ellipsoid may be (a rattleback's
+    // principal axes are turned from its geometric ones).
     const bool loaded = std::holds_alternative<LoadedBall>(*body.shape);
-    if (loaded != value.contains("inertia")) {
-      r.fail(path, loaded ? "a loaded ball needs \"mass\" (kg) and \"inertia\" (its principal "
-                            "moments about its centre of mass along x, y, z, kg m^2): uniform "
-                            "density cannot put its centre of mass off its centre"
-                          : "\"inertia\" is for a loaded ball only; other shapes' inertia comes "
-                            "from their shape and mass or density");
+    const bool ellipsoid = std::holds_alternative<Ellipsoid>(*body.shape);
+    const bool given = value.contains("inertia");
+    if (loaded && !given) {
+      r.fail(path,
+             "a loaded ball needs \"mass\" (kg) and \"inertia\" (its principal moments "
+             "about its centre of mass along x, y, z, kg m^2): uniform density cannot put "
+             "its centre of mass off its centre");
     }
-    if (loaded) {
-      if (!has_mass) r.fail(path, "a loaded ball needs \"mass\", not \"density\"");
-      const double mass = r.positive(value["mass"], path + "/mass");
-      const Vec3 I = r.vec3(value["inertia"], path + "/inertia");
-      for (int i = 0; i < 3; ++i) {
-        if (!(I[i] > 0.0)) {
-          r.fail_value(path + "/inertia/" + std::to_string(i), value["inertia"][i],
-                       "a positive principal moment");
-        }
+    if (given && !loaded && !ellipsoid) {
+      r.fail(path,
+             "\"inertia\" is for a loaded ball or an ellipsoid only; other shapes' inertia "
+             "comes from their shape and mass or density");
+    }
+    if (given) {
+      if (!has_mass) {
+        r.fail(path, loaded ? "a loaded ball needs \"mass\", not \"density\""
+                            : "an ellipsoid given \"inertia\" needs \"mass\", not \"density\"");
       }
+      const double mass = r.positive(value["mass"], path + "/mass");
+      const Mat3 I = parse_inertia(r, value["inertia"], path + "/inertia");
       try {
-        body.mass = mass_properties_from_inertia(mass, I.asDiagonal());
+        body.mass = mass_properties_from_inertia(mass, I);
       } catch (const InputError& e) {
         r.fail_value(path + "/inertia", value["inertia"], e.what());
       }

@@ -179,18 +179,36 @@ bool curved_contact(const ShapeGeometry& g, int piece, const std::vector<Vec3>& 
   return curved && feature.size() < 3;
 }
 
+// The radius of a round side touching along a straight segment — a cylinder or a capsule lying
+// on its side — else 0. Such a contact is held as a rounded segment (HeldLink::sphere_radius with
+// a two-point core): its contact line is the core (the axis, material) moved by the radius
+// against the normal, whichever way the body rolls about it.
+double round_side_radius(const ShapeGeometry& g, int piece, const std::vector<Vec3>& feature) {
+  if (piece < 0 || piece >= static_cast<int>(g.pieces().size()) || feature.size() != 2) return 0.0;
+  const ShapeGeometry::Piece& p = g.pieces()[piece];
+  if (p.kind != ShapeGeometry::PieceKind::kSmooth || p.smooth == nullptr) return 0.0;
+  if (const auto* cylinder = std::get_if<Cylinder>(p.smooth)) return cylinder->radius;
+  if (const auto* capsule = std::get_if<Capsule>(p.smooth)) return capsule->radius;
+  return 0.0;
+}
+
 }  // namespace
 
 std::optional<HeldLink> make_held_link(std::uint32_t pair, BodyId a, BodyId b,
                                        const LinkSide& side_a, const LinkSide& side_b,
                                        const DistanceResult& closest,
                                        const ContactGeometry& geometry) {
-  if (curved_contact(side_a.geometry, closest.piece1, geometry.feature1) ||
-      curved_contact(side_b.geometry, closest.piece2, geometry.feature2)) {
-    return std::nullopt;
-  }
   const bool plane1 = geometry.unbounded1 || geometry.feature1.size() >= 3;
   const bool plane2 = geometry.unbounded2 || geometry.feature2.size() >= 3;
+  // A round side on the other body's plane is held as a rounded segment; any other curved contact
+  // is not (see curved_contact).
+  const double round1 = round_side_radius(side_a.geometry, closest.piece1, geometry.feature1);
+  const double round2 = round_side_radius(side_b.geometry, closest.piece2, geometry.feature2);
+  if ((round1 == 0.0 && curved_contact(side_a.geometry, closest.piece1, geometry.feature1)) ||
+      (round2 == 0.0 && curved_contact(side_b.geometry, closest.piece2, geometry.feature2)) ||
+      (round1 > 0.0 && !plane2) || (round2 > 0.0 && !plane1)) {
+    return std::nullopt;
+  }
   if (!plane1 && !plane2) return point_pair_link(pair, a, b, side_a, side_b, closest, geometry);
   // Body 2's plane faces body 1 along n; body 1's faces body 2 along -n. Face on face: the
   // support is the fixed or kinematic body, or body 2.
@@ -222,8 +240,36 @@ std::optional<HeldLink> make_held_link(std::uint32_t pair, BodyId a, BodyId b,
     }
   }
   const ShapeGeometry& mg = mover.geometry;
-  if (mg.pieces().size() == 1 && mg.pieces()[0].kind == ShapeGeometry::PieceKind::kSphere &&
-      mg.pieces()[0].p_M.norm() == 0.0) {
+  const double round = support_is_b ? round1 : round2;
+  if (round > 0.0) {
+    // The core under the contact line: the piece's own axis (exact, material), not the query's
+    // points (a closest-feature query places them only to its tolerance, and a core off the axis
+    // would lift and drop the body as it rolls).
+    link.sphere_radius = round;
+    // On a face, the face's own plane too (the query's normal from GJK is as loose as its points:
+    // a plane tilted by 1e-5 would be rolled up or down).
+    if (support_feature.size() >= 3) {
+      Vec3 face_n = Vec3::Zero();
+      for (std::size_t i = 0; i < support_feature.size(); ++i) {
+        face_n += support_feature[i].cross(support_feature[(i + 1) % support_feature.size()]);
+      }
+      if (face_n.norm() > 0.0) {
+        face_n = face_n.dot(n_W) < 0.0 ? Vec3(-face_n.normalized()) : Vec3(face_n.normalized());
+        link.normal_S = R_S.transpose() * face_n;
+        link.point_S = R_S.transpose() * (support_feature[0] - support.state.x_W);
+        link.t1_S = link.normal_S.unitOrthogonal();
+      }
+    }
+    const ShapeGeometry::Piece& piece =
+        mg.pieces()[static_cast<std::size_t>(support_is_b ? closest.piece1 : closest.piece2)];
+    double half = 0.0;
+    if (const auto* cylinder = std::get_if<Cylinder>(piece.smooth)) half = cylinder->half_height;
+    if (const auto* capsule = std::get_if<Capsule>(piece.smooth)) half = capsule->half_length;
+    for (const double end : {-half, half}) {
+      link.mover_feature_M.push_back(piece.p_M + piece.R_M * Vec3(0.0, 0.0, end));
+    }
+  } else if (mg.pieces().size() == 1 && mg.pieces()[0].kind == ShapeGeometry::PieceKind::kSphere &&
+             mg.pieces()[0].p_M.norm() == 0.0) {
     link.sphere_radius = mg.pieces()[0].radius;
   } else {
     const std::vector<Vec3>& feature = support_is_b ? geometry.feature1 : geometry.feature2;
@@ -326,13 +372,14 @@ bool place_link(const HeldLink& link, const BodyState& mover, const BodyState& s
   out.sphere_radius = link.sphere_radius;
   std::vector<Vec2> feature;
   std::vector<double> heights;
-  if (link.sphere_radius > 0.0) {
+  if (link.sphere_radius > 0.0 && link.mover_feature_M.empty()) {
     const Vec3 c = mover.x_W - link.sphere_radius * n;
     feature.push_back(project(c));
     heights.push_back(n.dot(c - origin));
   } else {
+    // A polyhedron's feature, or a rounded segment's contact line (its core less R n).
     for (const Vec3& p_M : link.mover_feature_M) {
-      const Vec3 p = mover.x_W + R_M * p_M;
+      const Vec3 p = mover.x_W + R_M * p_M - link.sphere_radius * n;
       feature.push_back(project(p));
       heights.push_back(n.dot(p - origin));
     }
@@ -363,6 +410,9 @@ bool place_link(const HeldLink& link, const BodyState& mover, const BodyState& s
   height /= static_cast<double>(heights.size());
   const Vec2 c2 = centroid(patch);
   out.c_W = origin + c2.x() * t1 + c2.y() * t2 + height * n;
+  out.core_offset_W = link.sphere_radius > 0.0 && !link.mover_feature_M.empty()
+                          ? Vec3(out.c_W + link.sphere_radius * n - mover.x_W)
+                          : Vec3::Zero();
   out.polygon.clear();
   if (patch.size() >= 3) {
     out.patch = PatchKind::kPolygon;
@@ -444,7 +494,10 @@ Problem build_problem(const Island& island, const World& world,
     const Material& m = world.material(link.mover, link.support);
     c.friction = m.friction;
     c.spinning_resistance = m.spinning_resistance;
-    c.rolling_resistance = link.sphere_radius > 0.0 ? m.rolling_resistance : 0.0;
+    // Rolling resistance acts at a sphere's point (impulse/contact_dynamics.hpp), not along a
+    // rounded segment's line.
+    c.rolling_resistance =
+        link.sphere_radius > 0.0 && link.mover_feature_M.empty() ? m.rolling_resistance : 0.0;
     set_torsion_arm(c);
     c.sticks = link.sticks;
     c.slip_dir = link.slip_dir;
@@ -615,7 +668,9 @@ namespace {
 bool to_point_pair(HeldLink& link, const BodyState& mover, const BodyState& support) {
   const std::size_t n = link.support_face_S.size();
   // Only a sphere has a point contact that can be held (two polyhedra: see point_pair_link).
-  if (link.point_pair || link.sphere_radius == 0.0 || n < 3) return false;
+  if (link.point_pair || link.sphere_radius == 0.0 || !link.mover_feature_M.empty() || n < 3) {
+    return false;
+  }
   const Mat3 R_S = rotation(support);
   const std::vector<Vec3> m = {mover.x_W};
   double best = kInfinity;
@@ -700,6 +755,47 @@ Island::PlanResult Island::plan(World& world, const std::vector<const ShapeGeome
     // What separates faster than a microcollision would rebound lets go; slower is held (the
     // hand-over rule of a collision, DESIGN.md §8.1).
     const double separation = microcollision_speed(settings, world.gravity_W.norm());
+    // A face that lifts off on one side while an edge of it stays down, on a body that would tip
+    // about that edge anyway (the centre of pressure the whole face would need lies beyond it),
+    // keeps only that edge: a prism rolling down a slope lands on its next face turning about the
+    // leading edge, and holding the whole face would take an impulse pulling the rising side down,
+    // which a contact cannot give - it would stop the prism dead at every face. (On a face it can
+    // stand on, the rocking is a landing's remainder, taken out by the projection below, as
+    // before.)
+    if (cause.kind != IslandEvent::Kind::kTip) {
+      const std::vector<HeldContactMotion> now = held_velocities(p.bodies, p.contacts);
+      const HeldSolution statics = solve_held(p.bodies, p.contacts);
+      for (std::size_t i = 0; i < p.contacts.size(); ++i) {
+        HeldContact& c = p.contacts[i];
+        if (!c.active || c.patch != PatchKind::kPolygon || c.mover < 0) continue;
+        const std::size_t n = c.polygon.size();
+        std::vector<double> rise(n);
+        double highest = -kInfinity;
+        for (std::size_t k = 0; k < n; ++k) {
+          const Vec3 r = c.polygon[k].x() * c.t1_W + c.polygon[k].y() * c.t2_W;
+          rise[k] = (now[i].slip_W + now[i].dw_W.cross(r)).dot(c.n_W);
+          highest = std::max(highest, rise[k]);
+        }
+        int edge = -1;
+        double lowest = kInfinity;
+        for (std::size_t k = 0; k < n; ++k) {
+          const double edge_rise = std::max(rise[k], rise[(k + 1) % n]);
+          if (edge_rise < lowest) {
+            lowest = edge_rise;
+            edge = static_cast<int>(k);
+          }
+        }
+        if (edge < 0 || !(lowest <= still)) continue;
+        const Vec2& a = c.polygon[static_cast<std::size_t>(edge)];
+        const Vec2 d = c.polygon[(static_cast<std::size_t>(edge) + 1) % n] - a;
+        const bool tips = statics.status == HeldStatus::kOk &&
+                          cross2(d, statics.forces[i].centre_of_pressure - a) < 0.0;
+        if (!(tips && highest > still)) continue;
+        if (!forced) before = p.contacts;
+        reduce_patch(c, edge);
+        forced = true;
+      }
+    }
     result.projection_energy +=
         project_held_velocities(p.bodies, p.contacts, still, separation, &separating);
     for (std::size_t k = 0; k < bodies.size(); ++k) {
@@ -784,6 +880,11 @@ Island::PlanResult Island::plan(World& world, const std::vector<const ShapeGeome
       const int edge = support_edge_under(link, ss, points);
       if (edge >= 0) {
         if (!swap_roles(link, edge, sm, ss)) drop.push_back(static_cast<int>(i));
+        again = true;
+      } else if (link.sphere_radius > 0.0 && !link.mover_feature_M.empty()) {
+        // A rounded segment tipping about an end of its line (a cylinder half off a face): its
+        // contact would leave the side for the rim, which no link follows; it lets go.
+        drop.push_back(static_cast<int>(i));
         again = true;
       } else if (link.sphere_radius == 0.0) {
         // The reduced patch's points lie at the patch's mean height; the feature kept is the
@@ -918,11 +1019,53 @@ void Island::classify(const World& world, const std::vector<const ShapeGeometry*
     }
   }
 
-  // Uniformly accelerated: no body turns but spheres, no plane turns, every slip keeps its
-  // direction.
+  // Bodies that roll about a fixed axis of their own: a cylinder or capsule held only along
+  // rounded segments of its side (all along one axis d), its centre of mass on that axis, its
+  // inertia symmetric about it, turning and accelerated about d alone (to what the model
+  // resolves). Its contact lines then stay put relative to its centre, its world inertia stays
+  // constant and the gyroscopic term vanishes: like a sphere's, its accelerations are constant
+  // while the modes hold, and its orientation is the rotation by w0 t + alpha t^2 / 2 about d.
+  std::vector<bool> roller(nb, false);
+  std::vector<Vec3> roll_axis(nb, Vec3::Zero());
+  for (std::size_t k = 0; k < nb; ++k) {
+    if (sphere[k]) continue;
+    bool ok = true, found = false;
+    Vec3 d = Vec3::Zero();
+    for (std::size_t i = 0; i < links.size() && ok; ++i) {
+      const HeldLink& l = links[i];
+      if (l.support == bodies[k]) ok = false;
+      if (!ok || l.mover != bodies[k]) continue;
+      if (!(l.sphere_radius > 0.0 && l.mover_feature_M.size() == 2) || !contacts[i].active) {
+        ok = false;
+        continue;
+      }
+      const Vec3 e =
+          (rotation(anchor_[k]) * (l.mover_feature_M[1] - l.mover_feature_M[0])).normalized();
+      const Vec3& r_q = contacts[i].core_offset_W;
+      ok = (!found || e.cross(d).norm() <= 1e-12) &&
+           (r_q - e * e.dot(r_q)).norm() <= 1e-12 * reach[k];
+      d = e;
+      found = true;
+    }
+    if (!ok || !found) continue;
+    const Body& b = world.bodies[bodies[k].index];
+    const Mat3 I = inertia_W(b, anchor_[k].q_WM);
+    const double i_d = d.dot(I * d);
+    const double i_p = 0.5 * (I.trace() - i_d);
+    const Mat3 dd = d * d.transpose();
+    const Mat3 symmetric = i_p * (Mat3::Identity() - dd) + i_d * dd;
+    const Vec3 w = anchor_[k].w_W, alpha = sol.alpha_W[k];
+    roller[k] = (I - symmetric).norm() <= 1e-12 * I.norm() &&
+                (w - d * d.dot(w)).norm() * reach[k] <= still &&
+                (alpha - d * d.dot(alpha)).norm() * reach[k] <= a_floor;
+    roll_axis[k] = d;
+  }
+
+  // Uniformly accelerated: no body turns but spheres and rollers, no plane turns, every slip
+  // keeps its direction.
   bool uniform = true;
   for (std::size_t k = 0; k < nb && uniform; ++k) {
-    if (sphere[k]) continue;
+    if (sphere[k] || roller[k]) continue;
     uniform =
         anchor_[k].w_W.norm() * reach[k] <= still && sol.alpha_W[k].norm() * reach[k] <= a_floor;
   }
@@ -950,6 +1093,11 @@ void Island::classify(const World& world, const std::vector<const ShapeGeometry*
         alpha_[k] = sol.alpha_W[k];
         turning_[k] = anchor_[k].w_W.cross(alpha_[k]).norm() >
                       1e-15 * anchor_[k].w_W.norm() * alpha_[k].norm();
+      } else if (roller[k]) {
+        // About its axis alone (what lies off it is below what the model resolves, snapped).
+        const Vec3& d = roll_axis[k];
+        alpha_[k] = d * d.dot(sol.alpha_W[k]);
+        anchor_[k].w_W = d * d.dot(anchor_[k].w_W);
       } else {
         anchor_[k].w_W.setZero();  // below what the model resolves (snapped, see above)
       }

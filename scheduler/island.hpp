@@ -38,10 +38,13 @@ namespace palpable {
 struct HeldLink {
   std::uint32_t pair = 0;  // the pair's slot (PairSet)
   BodyId mover, support;
-  int support_piece = 0;       // which piece of a compound support holds it
-  double sphere_radius = 0.0;  // > 0: the mover is a sphere centred at its origin
+  int support_piece = 0;  // which piece of a compound support holds it
+  // > 0: the mover is rounded by this radius about a core: a sphere centred at its origin (no
+  // feature), or a cylinder or capsule lying on its side (its feature is then the core, the
+  // piece's axis: the contact line is the axis moved by the radius against the normal).
+  double sphere_radius = 0.0;
   // The mover's contact feature: a face (counter-clockwise about the mover's outward normal),
-  // an edge (2 points) or a vertex (1); empty for a sphere.
+  // an edge (2 points) or a vertex (1); empty for a sphere; the axis of a rounded side.
   std::vector<Vec3> mover_feature_M;
   // The support's face (counter-clockwise about normal_S); empty for a halfspace (unbounded).
   std::vector<Vec3> support_face_S;
@@ -77,7 +80,8 @@ struct LinkSide {
 // plane (held by neither rule: they stay collisions), and for a curved surface touching along a
 // point or a line (a smooth shape other than a cylinder's flat cap, a loaded ball): rolling moves
 // that contact over the surface, which material points cannot follow, so it stays a train of
-// microcollisions.
+// microcollisions — except a cylinder's or capsule's side lying on a plane, held like a sphere
+// about its axis (sphere_radius).
 std::optional<HeldLink> make_held_link(std::uint32_t pair, BodyId a, BodyId b,
                                        const LinkSide& side_a, const LinkSide& side_b,
                                        const DistanceResult& closest,

@@ -603,6 +603,46 @@ TEST_CASE("smooth shapes against a halfspace: closed form, either order", "[dist
   }
 }
 
+TEST_CASE("smooth shapes across a box's face at tiny gaps: the face's normal, exactly",
+          "[distance][smooth]") {
+  // A cylinder lying across a long tilted box (6 m, a ramp) and an ellipsoid over it, at gaps
+  // from 1e-12 to 1e-3 m, either order: where the round piece's lowest point against the face
+  // lies over the face, the face gives the distance and normal in closed form. GJK alone took
+  // its normal as a difference of two points a gap apart on bodies metres long: measured here
+  // before, normals 1e-4 to 6e-4 rad off or failed queries (and in the cylinder-on-a-ramp scene,
+  // stray microcollisions along normals 86 degrees off).
+  const double th = 10.0 * 3.14159265358979323846 / 180.0;
+  const Quat q_ramp(Eigen::AngleAxisd(th, Vec3::UnitY()));
+  const Vec3 n = q_ramp * Vec3::UnitZ(), down = q_ramp * Vec3::UnitX();
+  const TestShape ramp = make_test_shape("ramp", ConvexPolyhedron::box(Vec3(3.0, 0.5, 0.1)));
+  const Pose ramp_pose{-0.1 * n, q_ramp};
+  const TestShape cylinder = make_test_shape("cylinder", make_cylinder(0.05, 0.05));
+  const TestShape egg = make_test_shape("egg", make_ellipsoid(Vec3(0.02, 0.03, 0.05)));
+  for (const double gap : {1e-12, 1e-9, 1e-6, 1e-3}) {
+    for (const double along : {-2.0, 0.0, 0.5, 2.9}) {
+      for (int which = 0; which < 2; ++which) {
+        CAPTURE(gap, along, which);
+        const TestShape& s = which == 0 ? cylinder : egg;
+        const Quat q = which == 0
+                           ? Quat(Eigen::AngleAxisd(3.14159265358979323846 / 2, Vec3::UnitX()))
+                           : Quat(Eigen::AngleAxisd(0.3, Vec3(1, 2, 3).normalized()));
+        // Place it `gap` above the face along n, `along` down the slope.
+        const Vec3 low = support_W(*s.shape, Vec3::Zero(), q, -n);
+        const Pose pose{along * down - n.dot(low) * n + gap * n, q};
+        for (bool swap : {false, true}) {
+          PairCache cache;
+          const DistanceResult r =
+              swap ? closest_features(*ramp.geometry, ramp_pose, *s.geometry, pose, cache, 100)
+                   : closest_features(*s.geometry, pose, *ramp.geometry, ramp_pose, cache, 100);
+          REQUIRE(r.status == ContactStatus::kSeparated);
+          CHECK(r.distance == Approx(gap).margin(1e-15));
+          CHECK((r.n_W - (swap ? Vec3(-n) : n)).norm() <= 1e-15);
+        }
+      }
+    }
+  }
+}
+
 TEST_CASE("smooth shapes: patch of a cylinder's cap, a cylinder's and a capsule's side, a point",
           "[distance][smooth][patch]") {
   const TestShape ground = make_test_shape("ground", make_halfspace(Vec3::UnitZ(), 0.0));

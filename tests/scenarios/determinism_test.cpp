@@ -62,8 +62,13 @@ const Expected kExpected[] = {
     {"bowling.json", 0x0ac28b1558ff64ecull},
     {"chain_of_balls.json", 0x77e5ac8fe4550a70ull},
     {"coins.json", 0x882f15f6c0fdb34bull},
+    {"cylinder_rolling_slope.json", 0xdcd448b0967314f3ull},
+    {"eulers_disk.json", 0x4661aa5e1f938a27ull},
     {"pool_break.json", 0x412f2ba6c63bad8aull},
+    {"rattleback.json", 0x62b720820bc2ac9full},
+    {"rolling_coin.json", 0x953d42cf719519d2ull},
     {"sphere_slide_to_roll.json", 0x8d0cc90c21d15ce4ull},
+    {"tippe_top.json", 0x339205ea28cbdc66ull},
 };
 
 }  // namespace

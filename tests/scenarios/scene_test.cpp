@@ -38,14 +38,17 @@ TEST_CASE("the base scene of the corpus parses", "[scenarios][scene]") {
 TEST_CASE("the smooth shapes' keys build their shapes, masses and compound parts",
           "[scenarios][scene][smooth]") {
   json scene = load_corpus()["base"];
-  scene["bodies"][1] = json::parse(R"({"name": "ball", "mass": 0.02, "inertia": [1.3e-6, 1.3e-6, 1.2e-6],
+  scene["bodies"][1] =
+      json::parse(R"({"name": "ball", "mass": 0.02, "inertia": [1.3e-6, 1.3e-6, 1.2e-6],
       "shape": {"type": "loaded_ball", "radius": 0.02, "com_offset": -0.005}, "position": [0, 0, 0.5]})");
-  scene["bodies"][2]["shape"] = json::parse(R"({"type": "cylinder", "radius": 0.1, "half_height": 0.02})");
+  scene["bodies"][2]["shape"] =
+      json::parse(R"({"type": "cylinder", "radius": 0.1, "half_height": 0.02})");
   scene["bodies"].push_back(json::parse(R"({"name": "egg", "density": 1000, "position": [2, 0, 1],
       "shape": {"type": "ellipsoid", "semi_axes": [0.02, 0.03, 0.05]}})"));
   scene["bodies"].push_back(json::parse(R"({"name": "pill", "mass": 2.0, "position": [3, 0, 1],
       "shape": {"type": "capsule", "radius": 0.01, "half_length": 0.03}})"));
-  scene["bodies"].push_back(json::parse(R"({"name": "rack", "motion": "fixed", "position": [5, 0, 1],
+  scene["bodies"].push_back(
+      json::parse(R"({"name": "rack", "motion": "fixed", "position": [5, 0, 1],
       "shape": {"type": "compound", "parts": [
         {"shape": {"type": "cylinder", "radius": 0.1, "half_height": 0.5}, "position": [0, 0, 0]},
         {"shape": {"type": "capsule", "radius": 0.05, "half_length": 0.2}, "position": [0, 1, 0]},
@@ -72,6 +75,39 @@ TEST_CASE("the smooth shapes' keys build their shapes, masses and compound parts
   CHECK(std::holds_alternative<palpable::Cylinder>(*rack.parts[0].shape));
   CHECK(std::holds_alternative<palpable::Capsule>(*rack.parts[1].shape));
   CHECK(std::holds_alternative<palpable::Ellipsoid>(*rack.parts[2].shape));
+}
+
+TEST_CASE("an ellipsoid given its inertia matrix has its principal axes turned as the matrix says",
+          "[scenarios][scene][smooth]") {
+  // A rattleback's inertia (Kane & Levinson 1982): A = 2e-4, B = 1.6e-3 about x, y, product
+  // D = -1.6e-5 between them, C = 1.7e-3 about z. The principal moments in the x-y plane are
+  // (A + B)/2 -+ sqrt(((B - A)/2)^2 + D^2), their axes turned about z by
+  // delta = atan(2 D / (A - B)) / 2 from x and y (0.65 degrees).
+  json scene = load_corpus()["base"];
+  scene["bodies"][1] = json::parse(R"({"name": "ball", "mass": 1.0,
+      "inertia": [[2e-4, -1.6e-5, 0], [-1.6e-5, 1.6e-3, 0], [0, 0, 1.7e-3]],
+      "shape": {"type": "ellipsoid", "semi_axes": [0.2, 0.03, 0.02]}, "position": [0, 0, 0.5]})");
+  const palpable::Scene s = palpable::scene_from_json(scene, "rattleback.json");
+  const palpable::Body& b = s.world.bodies[1];
+  const double A = 2e-4, B = 1.6e-3, C = 1.7e-3, D = -1.6e-5;
+  const double mid = 0.5 * (A + B), half = std::sqrt(0.25 * (B - A) * (B - A) + D * D);
+  CHECK(b.mass.mass == 1.0);
+  CHECK(b.mass.principal_moments.x() == Approx(mid - half).epsilon(1e-12));
+  CHECK(b.mass.principal_moments.y() == Approx(mid + half).epsilon(1e-12));
+  CHECK(b.mass.principal_moments.z() == Approx(C).epsilon(1e-12));
+  CHECK(b.mass.inertia_M(0, 1) == Approx(D).epsilon(1e-12));
+  CHECK(b.mass.inertia_M(0, 0) == Approx(A).epsilon(1e-12));
+  // The smallest moment's axis: turned from x by delta about z.
+  const double delta = 0.5 * std::atan(2.0 * D / (A - B));
+  const Eigen::Vector3d e = b.mass.q_MB.toRotationMatrix().col(0);
+  CHECK(std::abs(std::abs(e.x()) - std::cos(delta)) < 1e-12);
+  CHECK(std::abs(std::abs(e.y()) - std::abs(std::sin(delta))) < 1e-12);
+  CHECK(std::abs(e.z()) < 1e-12);
+  // Principal moments alone, as for a loaded ball, are the diagonal.
+  scene["bodies"][1]["inertia"] = json::parse("[2e-4, 1.6e-3, 1.7e-3]");
+  const palpable::Scene diagonal = palpable::scene_from_json(scene, "rattleback.json");
+  CHECK(diagonal.world.bodies[1].mass.inertia_M(0, 1) == 0.0);
+  CHECK(diagonal.world.bodies[1].mass.principal_moments.x() == Approx(A).epsilon(1e-12));
 }
 
 TEST_CASE("every bad scene is rejected naming its JSON path", "[scenarios][scene]") {
@@ -156,9 +192,9 @@ TEST_CASE("every setting of the table is read from a scene and printed in effect
           palpable::format_setting(info.get(defaults)));
     // A value of the wrong kind is rejected naming the pointer and the check.
     doc["settings"] = json::object({{key, json::array()}});
-    CHECK_THROWS_WITH(palpable::scene_from_json(doc, "s.json"),
-                      Catch::Contains("s.json:/settings/" + key) &&
-                          Catch::Contains(std::string(info.check)));
+    CHECK_THROWS_WITH(
+        palpable::scene_from_json(doc, "s.json"),
+        Catch::Contains("s.json:/settings/" + key) && Catch::Contains(std::string(info.check)));
   }
   // A changed value is the one printed.
   json doc = corpus["base"];
@@ -198,8 +234,8 @@ TEST_CASE("a file that is not JSON is named in the error", "[scenarios][scene]")
 TEST_CASE("hostile JSON: too deep, out of range, on the command line too", "[scenarios][scene]") {
   // 100,000 levels crashed the formatter after parsing; any depth past the limit is refused
   // while parsing, naming the source.
-  const std::string deep = "{\"description\": " + std::string(100000, '[') +
-                           std::string(100000, ']') + "}";
+  const std::string deep =
+      "{\"description\": " + std::string(100000, '[') + std::string(100000, ']') + "}";
   CHECK_THROWS_WITH(palpable::parse_json_text(deep, "deep.json"),
                     Catch::StartsWith("deep.json") && Catch::Contains("nested deeper than 256"));
   CHECK_NOTHROW(palpable::parse_json_text(std::string(255, '[') + std::string(255, ']'), "ok"));

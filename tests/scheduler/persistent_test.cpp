@@ -217,8 +217,8 @@ TEST_CASE("persistent: rolling and spinning resistance stop a ball in finite tim
   m.spinning_resistance = sres;
   world.default_material = m;
   world.add(test::fixed_ground("table"));
-  world.add(test::sphere_body("ball", R, 1.0, Vec3(0, 0, R), Vec3(v0, 0, 0),
-                              Vec3(0, v0 / R, w_spin)));
+  world.add(
+      test::sphere_body("ball", R, 1.0, Vec3(0, 0, R), Vec3(v0, 0, 0), Vec3(0, v0 / R, w_spin)));
   Simulation sim(world, SimulationOptions{0.01});
   Modes rec;
   sim.run_until(16.0, &rec);
@@ -369,5 +369,248 @@ TEST_CASE("persistent: a ball rolling beside a wall it touches keeps its line an
       CHECK(sim.stats().floored_bounds == 0);
       CHECK(sim.stats().events < 1000);
     }
+  }
+}
+
+namespace {
+
+// Bodies that roll about an axis: a sphere, and a cylinder or capsule lying on its side (its
+// axis along y, across a slope that falls along x). k = I_axis / (m r^2) from the body's own mass
+// properties (1/2 for a solid cylinder, 2/5 for a solid sphere).
+enum class RollerKind { kSphere, kCylinder, kCapsule };
+
+Body roller_body(RollerKind kind, double r, const Vec3& x, const Vec3& v = Vec3::Zero(),
+                 const Vec3& w = Vec3::Zero()) {
+  const Quat lying = test::about(Vec3::UnitX(), kPi / 2);  // M's z (the axis) along -y
+  switch (kind) {
+    case RollerKind::kSphere: return test::sphere_body("roller", r, 1.0, x, v, w);
+    case RollerKind::kCylinder:
+      return test::dynamic_body("roller", make_cylinder(r, 0.05), 1.0, x, lying, v, w);
+    case RollerKind::kCapsule:
+      return test::dynamic_body("roller", make_capsule(r, 0.05), 1.0, x, lying, v, w);
+  }
+  return {};
+}
+
+double roller_k(const Body& b, double r) {
+  const Mat3 R = b.state.q_WM.toRotationMatrix();
+  const Mat3 I_W = R * b.mass.inertia_M * R.transpose();
+  return I_W(1, 1) / (b.mass.mass * r * r);
+}
+
+}  // namespace
+
+TEST_CASE("persistent: a sphere, cylinder or capsule on a slope rolls or slides at the closed form",
+          "[scheduler][persistent][smooth]") {
+  // From rest on the fixed slope (a halfspace) with normal n = (sin, 0, cos), e = 0. With
+  // mu >= k tan(theta) / (1 + k) it rolls: the centre accelerates at g sin(theta) / (1 + k) down
+  // the slope (5/7 g sin for a solid sphere, 2/3 g sin for a solid cylinder) and the spin about
+  // the axis grows at a / r; below it slides: a = g (sin - mu cos) and friction's torque spins it
+  // up at mu g cos / (k r) (DESIGN.md §6, §8.1). A cylinder or capsule on its side is held along
+  // its contact line, a sphere at its point; both move in closed form between events, so every
+  // sample is the closed form to rounding: asked here to 1e-9 relative. (Under microcollisions,
+  // tests/scheduler/simulation_test.cpp: about 3e-4 for the cylinder.)
+  const double r = 0.05;
+  struct Case {
+    RollerKind kind;
+    double angle_deg, mu;
+  };
+  for (const Case& c :
+       {Case{RollerKind::kCylinder, 10, 1.0}, Case{RollerKind::kSphere, 10, 1.0},
+        Case{RollerKind::kCapsule, 10, 1.0}, Case{RollerKind::kCylinder, 10, 0.03},
+        Case{RollerKind::kSphere, 10, 0.03}, Case{RollerKind::kCapsule, 10, 0.03},
+        Case{RollerKind::kCylinder, 25, 0.5}, Case{RollerKind::kCylinder, 35, 0.1}}) {
+    CAPTURE(static_cast<int>(c.kind), c.angle_deg, c.mu);
+    const double theta = c.angle_deg * kPi / 180.0;
+    const Vec3 n(std::sin(theta), 0.0, std::cos(theta));
+    const Vec3 down(std::cos(theta), 0.0, -std::sin(theta));
+    World world;
+    world.settings = persistent();
+    world.default_material = Material{c.mu, 0.0};
+    world.add(test::fixed_body("slope", make_halfspace(n, 0.0)));
+    const Vec3 x0 = (r + 1e-12) * n;
+    world.add(roller_body(c.kind, r, x0));
+    const double k = roller_k(world.bodies[1], r);
+    const bool rolls = c.mu >= k * std::tan(theta) / (1.0 + k);
+    const double a =
+        rolls ? kG * std::sin(theta) / (1.0 + k) : kG * (std::sin(theta) - c.mu * std::cos(theta));
+    const double alpha = rolls ? a / r : c.mu * kG * std::cos(theta) / (k * r);
+    CAPTURE(k, rolls, a, alpha);
+    Simulation sim(world, SimulationOptions{0.01});
+    Modes rec;
+    sim.run_until(1.5, &rec);
+    CHECK(sim.stats().penetrations == 0);
+    CHECK(sim.stats().microcollisions == 0);
+    CHECK(sim.stats().mode_changes == 0);  // held from the start to the end, in one motion
+    REQUIRE(rec.times.size() == 151);
+    for (std::size_t i = 1; i < rec.times.size(); ++i) {
+      const double t = rec.times[i];
+      const BodyState& s = rec.samples[i][1];
+      CHECK(std::abs(down.dot(s.x_W - x0) - 0.5 * a * t * t) <= 1e-9 * 0.5 * a * t * t);
+      CHECK(std::abs(down.dot(s.v_W) - a * t) <= 1e-9 * a * t);
+      CHECK(std::abs(s.w_W.y() - alpha * t) <= 1e-9 * alpha * t);
+      // On the slope, nothing across it, turning about its axis alone: to rounding (a tilt of
+      // 1e-12 rad would show).
+      const double travel = (s.x_W - x0).norm();
+      CHECK(std::abs(n.dot(s.x_W - x0)) <= 1e-12 * travel);
+      CHECK(std::abs(s.x_W.y()) <= 1e-12 * travel);
+      CHECK(std::abs(s.v_W.y()) <= 1e-12 * s.v_W.norm());
+      CHECK(std::abs(s.w_W.x()) + std::abs(s.w_W.z()) <= 1e-12 * s.w_W.norm());
+    }
+  }
+}
+
+TEST_CASE(
+    "persistent: a cylinder launched on a table slides, then rolls at the closed-form instant",
+    "[scheduler][persistent][smooth]") {
+  // A solid cylinder (k = 1/2) or a capsule lying on a fixed plane, launched across its axis at
+  // v0 with spin w0 about it (backspin negative): the slip v0 - r w0 decays at mu g (1 + 1/k) and
+  // it rolls from t = k s0 / ((1 + k) mu g) at (v0 + k r w0) / (1 + k) (DESIGN.md §6, the sphere's
+  // closed form with the cylinder's k), exactly.
+  const double r = 0.05, mu = 0.2, v0 = 2.0;
+  for (const RollerKind kind : {RollerKind::kCylinder, RollerKind::kCapsule}) {
+    for (const double w0 : {0.0, -20.0, 60.0}) {
+      CAPTURE(static_cast<int>(kind), w0);
+      World world;
+      world.settings = persistent();
+      world.default_material = Material{mu, 0.0};
+      world.add(test::fixed_ground("table"));
+      // Rolling along +x is w = +v/r about +y.
+      world.add(roller_body(kind, r, Vec3(0, 0, r), Vec3(v0, 0, 0), Vec3(0, w0, 0)));
+      const double k = roller_k(world.bodies[1], r);
+      Simulation sim(world, SimulationOptions{0.01});
+      Modes rec;
+      sim.run_until(1.5, &rec);
+      const double s0 = v0 - r * w0;
+      const double t_roll = k * std::abs(s0) / ((1 + k) * mu * kG);
+      const double v_final = (v0 + k * r * w0) / (1 + k);
+      REQUIRE(rec.first("stick"));
+      CHECK(rec.first("stick")->t == Approx(t_roll).margin(1e-9));
+      const BodyState end = sim.state_at(BodyId{1}, 1.5);
+      CHECK(end.v_W.x() == Approx(v_final).margin(1e-12));
+      CHECK(std::abs(end.v_W.y()) <= 1e-12 * end.v_W.norm());
+      CHECK(end.w_W.y() * r == Approx(v_final).margin(1e-12));
+      CHECK(std::abs(end.x_W.z() - r) <= 1e-12 * end.x_W.norm());
+      CHECK(end.x_W.x() ==
+            Approx(v0 * t_roll - 0.5 * (s0 > 0 ? 1 : -1) * mu * kG * t_roll * t_roll +
+                   v_final * (1.5 - t_roll))
+                .margin(1e-12));
+    }
+  }
+}
+
+TEST_CASE("persistent: a cylinder rolls down a box ramp's face and leaves it at its edge",
+          "[scheduler][persistent][smooth]") {
+  // The same roll on a fixed box's face (a bounded plane, paired by GJK rather than in closed
+  // form): held on the face's own plane it rolls at g sin(theta) / 1.5 exactly, and it lets go
+  // at the instant its contact line reaches the face's lower edge. It starts 1e-12 m above the
+  // face, where GJK's normal alone (a difference of points 1e-12 m apart on bodies metres long)
+  // was ill-conditioned - 110 failed queries and two stray microcollisions at the far end of
+  // the ramp before the face's normal was taken in closed form (distance/closest_features.cpp,
+  // snap_to_face).
+  const double theta = 10.0 * kPi / 180.0, r = 0.05;
+  Ramp ramp(theta, 1.0, make_cylinder(r, 0.05), r, -2.0, 0.0, 0.0, 1e-12);
+  ramp.world.bodies[1].state.q_WM = test::about(Vec3::UnitX(), kPi / 2);
+  Simulation sim(ramp.world, SimulationOptions{0.01});
+  Modes rec;
+  // No overlap and no failed query while held (to 3.5 s; the edge is at 3.511 s). Past the edge
+  // the cylinder's side rolls over the box's edge parallel to it, where no face gives the answer
+  // in closed form and GJK stalls (measured: 52 failed queries and 1 overlap by 3.52 s): a
+  // distance-module limit, not the hold's.
+  sim.run_until(3.5, &rec);
+  CHECK(sim.stats().penetrations == 0);
+  CHECK(sim.stats().distance_failures == 0);
+  sim.run_until(3.52, &rec);
+  const ModeChange* hold = rec.first("hold");
+  REQUIRE(hold);
+  CHECK(hold->t == 0.0);
+  const double a = kG * std::sin(theta) / 1.5;
+  // After the hold: v(t) = v(t1) + a (t - t1) between any two samples once it rolls.
+  const ModeChange* roll = rec.first("stick");
+  const double t_roll = roll ? roll->t : hold->t;
+  CHECK(t_roll < 2e-3);
+  std::size_t first = 0;
+  while (first < rec.times.size() && rec.times[first] <= t_roll) ++first;
+  REQUIRE(first + 100 < rec.times.size());
+  const BodyState s1 = rec.samples[first][1];
+  const ModeChange* edge = rec.first("tip");
+  REQUIRE(edge);
+  for (std::size_t i = first + 1; i < rec.times.size() && rec.times[i] < edge->t; ++i) {
+    const double dt = rec.times[i] - rec.times[first];
+    const BodyState& s = rec.samples[i][1];
+    CHECK(std::abs(ramp.down.dot(s.v_W - s1.v_W) - a * dt) <= 1e-9 * a * dt);
+    CHECK(std::abs(ramp.down.dot(s.x_W - s1.x_W) - ramp.down.dot(s1.v_W) * dt -
+                   0.5 * a * dt * dt) <= 1e-9 * (0.5 * a * dt * dt + ramp.down.dot(s1.v_W) * dt));
+    CHECK(std::abs(r * s.w_W.y() - ramp.down.dot(s.v_W)) <= 1e-9 * ramp.down.dot(s.v_W));
+  }
+  // The face ends 5 m down the slope from the origin: the contact line (under the centre) gets
+  // there when the centre has gone 5 - (-2) m from its start.
+  const double s_left = 5.0 - ramp.down.dot(s1.x_W);
+  const double v1 = ramp.down.dot(s1.v_W);
+  const double t_edge = rec.times[first] + (-v1 + std::sqrt(v1 * v1 + 2.0 * a * s_left)) / a;
+  CHECK(edge->t == Approx(t_edge).margin(1e-9));
+}
+
+TEST_CASE("persistent: an n-gon prism rolling down a slope keeps turning at each landing",
+          "[scheduler][persistent][smooth]") {
+  // A 64- and a 128-gon prism (circumradius L = 0.05 m) from rest on a face across 10 degrees,
+  // mu 1, e 0: it tips over its downhill edge and lands on the next face turning about the new
+  // leading edge, which an inelastic impact leaves at w+ = w- (I_c + m L^2 cos(2 pi / n)) /
+  // (I_c + m L^2): the rimless wheel (McGeer 1990), integrated here. Holding each new face whole
+  // would stop the prism at every landing (the trailing edge it lifts would have to be pulled
+  // down); measured before that was mended, 62 % (64-gon) and 72 % (128-gon) short of the rimless
+  // wheel at 0.5 s; now within 0.6 %. Asked: 1 % at 0.5 s. Later the landings fall behind (-22 %
+  // and -28 % at 1 s): each landing impulse acts at one corner of the landing edge (the corner
+  // landing first, scheduler/contact.cpp), which yaws the prism and lets it slip.
+  const double th = 10.0 * kPi / 180.0, L = 0.05;
+  const Vec3 n(std::sin(th), 0.0, std::cos(th)), down(std::cos(th), 0.0, -std::sin(th));
+  for (const int sides : {64, 128}) {
+    CAPTURE(sides);
+    const double a = kPi / sides;
+    World world;
+    world.settings = persistent();
+    world.default_material = Material{1.0, 0.0};
+    world.add(test::fixed_body("slope", make_halfspace(n, 0.0)));
+    // A face down: the face between vertices 0 and 1 (normal at angle a in the prism's plane)
+    // turned to -n, the axis along y.
+    const Quat q = test::about(Vec3::UnitY(), th) * test::about(Vec3::UnitX(), kPi / 2) *
+                   test::about(Vec3::UnitZ(), -kPi / 2 - a);
+    world.add(test::dynamic_body("prism", ConvexPolyhedron::prism(L, 0.05, sides), 1.0,
+                                 (L * std::cos(a) + 1e-12) * n, q));
+    Simulation sim(world, SimulationOptions{0.01});
+    test::Recorder rec;
+    sim.run_until(0.5, &rec);
+    CHECK(sim.stats().penetrations == 0);
+    const double s_sim = down.dot(rec.samples.back()[1].x_W - rec.samples.front()[1].x_W);
+    // The rimless wheel: the pivot angle psi of the centre from the normal through the downhill
+    // vertex, (I_c + m L^2) psi'' = m g L sin(psi + theta), from -a to a, then w *= ratio.
+    const double ic = L * L * (1.0 + 2.0 * std::cos(a) * std::cos(a)) / 6.0;  // per unit mass
+    const double j = ic + L * L, ratio = (ic + L * L * std::cos(2.0 * a)) / j;
+    auto f = [&](double psi) { return kG * L * std::sin(psi + th) / j; };
+    double psi = -a, w = 0.0, pivot = 0.0, t = 0.0;
+    const double h = 1e-6;
+    while (t < 0.5 - 1e-12) {
+      const double step = std::min(h, 0.5 - t);
+      const double k1p = w, k1w = f(psi);
+      const double k2p = w + 0.5 * step * k1w, k2w = f(psi + 0.5 * step * k1p);
+      const double k3p = w + 0.5 * step * k2w, k3w = f(psi + 0.5 * step * k2p);
+      const double k4p = w + step * k3w, k4w = f(psi + step * k3p);
+      const double psi_new = psi + step / 6.0 * (k1p + 2.0 * k2p + 2.0 * k3p + k4p);
+      const double w_new = w + step / 6.0 * (k1w + 2.0 * k2w + 2.0 * k3w + k4w);
+      if (psi_new >= a) {
+        const double frac = (a - psi) / (psi_new - psi);
+        t += frac * step;
+        w = (w + frac * (w_new - w)) * ratio;
+        psi = -a;
+        pivot += 2.0 * L * std::sin(a);
+      } else {
+        psi = psi_new;
+        w = w_new;
+        t += step;
+      }
+    }
+    const double s_rimless = pivot + L * std::sin(psi) + L * std::sin(a);
+    CAPTURE(s_sim, s_rimless);
+    CHECK(std::abs(s_sim / s_rimless - 1.0) < 0.01);
   }
 }

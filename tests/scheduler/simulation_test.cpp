@@ -371,7 +371,8 @@ TEST_CASE("a stack of three boxes, 1, 10 and 100 kg from the bottom, rests witho
   CHECK(carried == 2);
 }
 
-TEST_CASE("a box on a sliding block is carried by friction and stops with it", "[scheduler][stack]") {
+TEST_CASE("a box on a sliding block is carried by friction and stops with it",
+          "[scheduler][stack]") {
   // A 0.5 kg box on a 1 kg block (mu 1 between them), launched together at 1 m/s on a floor with
   // mu 0.3: friction decelerates the pair at 0.3 g, both stop after 1 / (2 0.3 g) = 0.16990 m.
   // The block bounces in microcollisions carrying the box (a rider); friction passes the block's
@@ -598,10 +599,11 @@ TEST_CASE("a true cylinder rolls down a 10 degree slope at about g sin(theta) / 
           "[scheduler][smooth]") {
   // From rest, mu = 1 (rolling needs mu >= tan(theta) / 3), e = 0: a solid cylinder (k = 1/2)
   // rolls at a = g sin(theta) / (1 + k). Its side touches the slope along a segment, a curved
-  // contact, so under either contact model it rolls as a train of microcollisions: its mean
-  // motion carries their jitter. Measured (least-squares fit of s = s0 + v0 t + a t^2 / 2 over
+  // contact; under the default (microcollision) model it rolls as a train of microcollisions: its
+  // mean motion carries their jitter. Measured (least-squares fit of s = s0 + v0 t + a t^2 / 2 over
   // 1 s): a within 3.4e-4 of the closed form at the default envelope 1e-4 m, 1.7e-5 at 1e-5 m and
-  // 3.7e-5 at 1e-6 m — far from the issue's 1e-9, which needs rolling held as persistent contact.
+  // 3.7e-5 at 1e-6 m. (Under the persistent model its contact line is held and the motion is the
+  // closed form to rounding: tests/scheduler/persistent_test.cpp.)
   const double kPi = 3.14159265358979323846;
   const double theta = 10.0 * kPi / 180.0, r = 0.05, g = 9.81;
   const Vec3 n(std::sin(theta), 0.0, std::cos(theta));

@@ -3,9 +3,12 @@
 #include "tools/lib/run_scene.hpp"
 
 #include "core/check.hpp"
+#include "core/shape.hpp"
 
+#include <Eigen/Dense>
 #include <catch2/catch.hpp>
 
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iterator>
@@ -14,6 +17,7 @@
 #include <vector>
 
 using nlohmann::json;
+using palpable::BodyState;
 using palpable::tools::run_scene;
 using palpable::tools::RunOptions;
 using palpable::tools::RunResult;
@@ -97,6 +101,151 @@ TEST_CASE("sphere launched without spin rolls from 2 v0 / (7 mu g) at 5 v0 / 7",
     CHECK(std::abs(f["deceleration_rel_error"].get<double>()) <= bound);
     CHECK(r.stats.microcollisions > 100);
     CHECK(r.stats.penetrations == 0);
+  }
+}
+
+TEST_CASE("a cylinder rolls down 10 degrees at g sin(theta) / 1.5, exactly when held",
+          "[tools][run][scene][smooth]") {
+  // scenarios/cylinder_rolling_slope.json: a solid cylinder (k = 1/2) from rest on a 10 degree
+  // slope, mu 1: a = g sin(theta) / (1 + k) along the slope, spin about its axis a t / r. Under the
+  // persistent model its side's contact line is held and every sample is that closed form (asked
+  // to 1e-9 relative; measured 1.1e-14 for the fitted acceleration); under microcollisions the
+  // trains of microcollisions blur it (measured 1.1e-4 by a least-squares fit over 1.5 s). With
+  // mu 0.03 < k tan(theta) / (1 + k) it slides at g (sin - mu cos) and friction spins it up at
+  // 2 mu g cos(theta) / r.
+  const double kPi = 3.14159265358979323846;
+  const double theta = 10.0 * kPi / 180.0, g = 9.81, r = 0.05;
+  const Eigen::Vector3d n(std::sin(theta), 0.0, std::cos(theta));
+  const Eigen::Vector3d down(std::cos(theta), 0.0, -std::sin(theta));
+  auto fitted_acceleration = [&](const RunResult& run) {
+    // Least squares for (s0, v0, a / 2) by the normal equations.
+    Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d b = Eigen::Vector3d::Zero();
+    const Eigen::Vector3d x0 = run.trace.samples.front()[1].x_W;
+    for (std::size_t k = 0; k < run.trace.times.size(); ++k) {
+      const double t = run.trace.times[k];
+      const Eigen::Vector3d basis(1.0, t, t * t);
+      A += basis * basis.transpose();
+      b += basis * down.dot(run.trace.samples[k][1].x_W - x0);
+    }
+    return 2.0 * A.ldlt().solve(b)(2);
+  };
+  struct Case {
+    const char* mu;
+    double a, alpha;
+  };
+  for (const Case& c : {Case{"1.0", g * std::sin(theta) / 1.5, g * std::sin(theta) / 1.5 / r},
+                        Case{"0.03", g * (std::sin(theta) - 0.03 * std::cos(theta)),
+                             2.0 * 0.03 * g * std::cos(theta) / r}}) {
+    CAPTURE(c.mu);
+    RunOptions options;
+    options.scene_path = scene("cylinder_rolling_slope.json");
+    options.overrides = {"/settings/contact_model=persistent",
+                         std::string("/parameters/mu=") + c.mu};
+    const RunResult held = run_scene(options);
+    CHECK(held.stats.penetrations == 0);
+    CHECK(held.stats.microcollisions == 0);
+    REQUIRE(held.trace.times.size() == 151);
+    const BodyState& start = held.trace.samples.front()[1];
+    for (std::size_t k = 1; k < held.trace.times.size(); ++k) {
+      const double t = held.trace.times[k];
+      const BodyState& s = held.trace.samples[k][1];
+      CHECK(std::abs(down.dot(s.x_W - start.x_W) - 0.5 * c.a * t * t) <= 1e-9 * 0.5 * c.a * t * t);
+      CHECK(std::abs(down.dot(s.v_W) - c.a * t) <= 1e-9 * c.a * t);
+      CHECK(std::abs(s.w_W.norm() - c.alpha * t) <= 1e-9 * c.alpha * t);
+      CHECK(std::abs(n.dot(s.x_W - start.x_W)) <= 1e-12 * (s.x_W - start.x_W).norm());
+    }
+    CHECK(std::abs(fitted_acceleration(held) - c.a) <= 1e-9 * c.a);
+    // The default model, for comparison: the same motion, blurred by its microcollisions.
+    options.overrides = {std::string("/parameters/mu=") + c.mu};
+    const RunResult trains = run_scene(options);
+    CHECK(trains.stats.microcollisions > 50);
+    CHECK(std::abs(fitted_acceleration(trains) - c.a) <= 1e-3 * c.a);
+  }
+}
+
+namespace {
+
+// Kinetic plus potential energy of body i in a sample (gravity along -z).
+double mechanical_energy(const palpable::World& world, std::size_t i, const BodyState& s) {
+  const palpable::Body& b = world.bodies[i];
+  const Eigen::Matrix3d R = s.q_WM.toRotationMatrix();
+  const Eigen::Matrix3d I_W = R * b.mass.inertia_M * R.transpose();
+  return 0.5 * b.mass.mass * s.v_W.squaredNorm() + 0.5 * s.w_W.dot(I_W * s.w_W) -
+         b.mass.mass * world.gravity_W.z() * s.x_W.z();
+}
+
+}  // namespace
+
+TEST_CASE("the rolling classics on their rims and balls run clean", "[tools][run][scene][smooth]") {
+  // scenarios/eulers_disk.json, rolling_coin.json, tippe_top.json and rattleback.json: a rim, a
+  // ball or an ellipsoid touching a table at a point, which neither contact model holds yet, so
+  // each is a train of microcollisions (what they do against their closed forms is measured in
+  // scenarios/README.md). Checked here only what must hold whatever the contact model: no overlap
+  // or failed query, finite states, every sample on or above the table. The coin, the top and the
+  // spun rattleback also never gain more energy than the microcollision floor lends (1/2 m
+  // v_micro^2); Euler's disk does (up to 7 times that, +2.9
+  // %, measured on the 2 s run: the drift-free target pumps energy into a rim rolling in a tight
+  // circle; reported, not asserted).
+  for (const char* name :
+       {"eulers_disk.json", "rolling_coin.json", "tippe_top.json", "rattleback.json"}) {
+    CAPTURE(name);
+    RunOptions options;
+    options.scene_path = scene(name);
+    const RunResult r = run_scene(options);
+    CHECK(r.stats.penetrations == 0);
+    CHECK(r.stats.distance_failures == 0);
+    CHECK(r.stats.impulse_failures == 0);
+    CHECK(r.stats.retry_limit_hits == 0);
+    const palpable::World& world = r.scene.world;
+    const double g = -world.gravity_W.z();
+    const double v_micro = std::sqrt(2.0 * g * world.settings.envelope_m);
+    const double e0 = mechanical_energy(world, 1, r.trace.samples.front()[1]);
+    const double lend = 0.5 * world.bodies[1].mass.mass * v_micro * v_micro;
+    REQUIRE(r.trace.samples.size() > 1000);
+    for (const auto& sample : r.trace.samples) {
+      const BodyState& s = sample[1];
+      REQUIRE((s.x_W.allFinite() && s.q_WM.coeffs().allFinite() && s.v_W.allFinite() &&
+               s.w_W.allFinite()));
+      const Eigen::Vector3d low =
+          palpable::support_W(*world.bodies[1].shape, s.x_W, s.q_WM, -Eigen::Vector3d::UnitZ());
+      CHECK(low.z() >= -1e-12);
+      if (std::string(name) != "eulers_disk.json") {
+        CHECK(mechanical_energy(world, 1, s) <= e0 + lend);
+      }
+    }
+  }
+}
+
+TEST_CASE("the tippe top turns over inside its inertia band and stays upright outside it",
+          "[tools][run][scene][smooth]") {
+  // scenarios/tippe_top.json: a loaded ball (R = 0.02 m, centre of mass a = 5 mm below its
+  // centre) spun at 150 rad/s. With 1 - a/R < I3/I1 < 1 + a/R (1.185) sliding friction turns it
+  // over: measured, its axis passes the horizontal at about 1.2 s and is within 3 degrees of
+  // pointing down by 2 s, its centre of mass risen by 2 a (0.015 to 0.025 m). With I3/I1 = 1.33
+  // it stays upright. Asked here: the axis within 20 degrees of down (up) over the last 5 s, the
+  // centre of mass within 0.5 mm of R + a (R - a) there (the microcollisions' flights and the
+  // slow tilt move it by about 0.2 mm).
+  for (const bool band : {true, false}) {
+    CAPTURE(band);
+    RunOptions options;
+    options.scene_path = scene("tippe_top.json");
+    if (!band) options.overrides = {"/bodies/1/inertia=[2.7e-6,2.7e-6,3.6e-6]"};
+    const RunResult r = run_scene(options);
+    CHECK(r.stats.penetrations == 0);
+    const double R = 0.02, a = 0.005;
+    for (std::size_t k = 0; k < r.trace.times.size(); ++k) {
+      if (r.trace.times[k] < 3.0) continue;
+      const BodyState& s = r.trace.samples[k][1];
+      const Eigen::Vector3d axis = s.q_WM.toRotationMatrix().col(2);
+      if (band) {
+        CHECK(axis.z() < -std::cos(20.0 * 3.14159265358979323846 / 180.0));
+        CHECK(std::abs(s.x_W.z() - (R + a)) < 5e-4);
+      } else {
+        CHECK(axis.z() > std::cos(20.0 * 3.14159265358979323846 / 180.0));
+        CHECK(std::abs(s.x_W.z() - (R - a)) < 5e-4);
+      }
+    }
   }
 }
 
@@ -224,7 +373,8 @@ TEST_CASE("a scene's reference follows --set: its closed form is the new scene's
   const double g = 9.81, theta = 30.0 * 3.14159265358979323846 / 180.0;
   RunOptions options;
   options.scene_path = scene("block_on_ramp_decelerating.json");
-  options.overrides = {"/materials/pairs/0/friction=0.8", "/bodies/1/velocity=[0.8660254037844386, 0, -0.5]"};
+  options.overrides = {"/materials/pairs/0/friction=0.8",
+                       "/bodies/1/velocity=[0.8660254037844386, 0, -0.5]"};
   const RunResult r = run_scene(options);
   const double a = g * (std::sin(theta) - 0.8 * std::cos(theta));
   CHECK(r.reference["acceleration_closed_form"].get<double>() == Approx(a).epsilon(1e-12));
@@ -277,7 +427,9 @@ TEST_CASE("a fixed body is written in the first sample only and read back in eve
   std::string line;
   std::map<std::string, int> rows;
   std::getline(in, line);
-  while (std::getline(in, line)) ++rows[line.substr(line.find(',') + 1, line.find(',', line.find(',') + 1) - line.find(',') - 1)];
+  while (std::getline(in, line))
+    ++rows[line.substr(line.find(',') + 1,
+                       line.find(',', line.find(',') + 1) - line.find(',') - 1)];
   const std::size_t samples = r.trace.times.size();
   REQUIRE(samples > 10);
   for (const char* fixed : {"lane", "kickback_left", "kickback_right", "pit_cushion"}) {
