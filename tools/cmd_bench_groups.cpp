@@ -42,14 +42,15 @@ struct Worst {
   nlohmann::json json() const { return {{"value", value}, {"group", group}}; }
 };
 
-int run_groups(std::int64_t count, std::uint64_t seed) {
+int run_groups(std::int64_t first, std::int64_t count, std::uint64_t seed) {
   palpable::tools::RandomGroups groups(seed);
+  for (std::int64_t i = 0; i < first; ++i) groups.next();  // drawn, not resolved
   const palpable::tools::GroupBounds bounds;
   Worst energy_ratio, cone_excess, negative_normal, normal_deficit, normal_mismatch, momentum;
   std::int64_t violations = 0, unconverged = 0, scaled = 0, pushed = 0, contacts = 0;
   nlohmann::json first_violations = nlohmann::json::array();
   const auto start = std::chrono::steady_clock::now();
-  for (std::int64_t i = 0; i < count; ++i) {
+  for (std::int64_t i = first; i < first + count; ++i) {
     const RandomGroup g = groups.next();
     const GroupResult r = palpable::resolve_group(g.bodies, g.contacts);
     const GroupFigures f = palpable::tools::group_figures(g, r);
@@ -72,6 +73,7 @@ int run_groups(std::int64_t count, std::uint64_t seed) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   nlohmann::json line{{"bench", "groups"},
                       {"seed", seed},
+                      {"first", first},
                       {"count", count},
                       {"contacts", contacts},
                       {"violations", violations},
@@ -199,13 +201,19 @@ palpable::tools::CommandRegistration groups_registration{
           "the bounds (energy created, an impulse outside its cone, a contact left approaching, "
           "momentum), the worst of each figure and the group that reached it. Exit 1 if any "
           "group breaks a bound.\n\nExample:\n  palpable bench groups --count 100000 --seed "
-          "20261124");
+          "20261124\n  palpable bench groups --first 50000 --count 50000   (its second half)");
       auto count = std::make_shared<std::int64_t>(100000);
       auto seed = std::make_shared<std::uint64_t>(20261124);
+      auto first = std::make_shared<std::int64_t>(0);
       app.add_option("--count", *count, "number of groups (default 100000)")
           ->check(CLI::Range(std::int64_t{1}, std::int64_t{1} << 40));
+      app.add_option("--first", *first,
+                     "index of the first group resolved (the ones before are drawn and skipped), "
+                     "so that a long run can be split over processes; default 0")
+          ->check(CLI::Range(std::int64_t{0}, std::int64_t{1} << 40));
       app.add_option("--seed", *seed, "seed of the stream (default 20261124, the suite's)");
-      return std::function<int()>([count, seed] { return run_groups(*count, *seed); });
+      return std::function<int()>(
+          [first, count, seed] { return run_groups(*first, *count, *seed); });
     }};
 
 palpable::tools::CommandRegistration cost_registration{
