@@ -1,0 +1,169 @@
+// Issue 17: placements that touch to within rounding are accepted, a true overlap is still
+// refused naming the file and both bodies, and touching bodies that move together are not
+// penetrations. Scenes are written to files and run through `palpable run`'s code path.
+#include "tools/lib/run_scene.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <fstream>
+#include <string>
+
+using nlohmann::json;
+using palpable::tools::run_scene;
+using palpable::tools::RunOptions;
+using palpable::tools::RunResult;
+
+namespace {
+
+json floor_body() {
+  return {{"name", "floor"},
+          {"motion", "fixed"},
+          {"shape", {{"type", "halfspace"}, {"normal", {0, 0, 1}}, {"offset", 0}}}};
+}
+
+json box(const std::string& name, double h, double x, double z) {
+  return {{"name", name},
+          {"mass", 1.0},
+          {"shape", {{"type", "box"}, {"half_extents", {h / 2, h / 2, h / 2}}}},
+          {"position", {x, 0.0, z}}};
+}
+
+json scene_of(const json& bodies, double end_time) {
+  return {{"format", "palpable-scene/1"},
+          {"name", "touching"},
+          {"gravity", {0, 0, -9.81}},
+          {"end_time", end_time},
+          {"output", {{"interval", 0.01}}},
+          {"materials", {{"default", {{"friction", 0.5}, {"restitution", 0.5}}}}},
+          {"bodies", bodies}};
+}
+
+// Boxes of side h at z = h/2 + h i: each rests on the one below to within rounding.
+json tower(int n, double h, double lowered_top = 0.0) {
+  json bodies = json::array({floor_body()});
+  for (int i = 0; i < n; ++i) {
+    const double z = h / 2 + h * i - (i == n - 1 ? lowered_top : 0.0);
+    bodies.push_back(box("box" + std::to_string(i), h, 0.0, z));
+  }
+  return bodies;
+}
+
+// Rows of rows, rows - 1, ... boxes, each row's boxes side by side (touching) and each box on
+// two of the row below, offset by h/2.
+json pyramid(int rows, double h) {
+  json bodies = json::array({floor_body()});
+  for (int r = 0; r < rows; ++r) {
+    const int k = rows - r;
+    for (int j = 0; j < k; ++j) {
+      bodies.push_back(box("b" + std::to_string(r) + "_" + std::to_string(j), h,
+                           (j - (k - 1) / 2.0) * h, h / 2 + r * h));
+    }
+  }
+  return bodies;
+}
+
+// The scene in a file named after the case, removed when the guard goes.
+struct SceneFile {
+  std::string path;
+  SceneFile(const std::string& name, const json& scene) : path("touching_test_" + name + ".json") {
+    std::ofstream(path) << scene.dump();
+  }
+  ~SceneFile() { std::remove(path.c_str()); }
+};
+
+}  // namespace
+
+TEST_CASE("touching: towers placed at z = h/2 + h i load and stand, no overlap", "[tools][run]") {
+  for (double h : {0.1, 0.3}) {
+    for (int n : {2, 10, 20}) {
+      CAPTURE(h, n);
+      const SceneFile file("tower", scene_of(tower(n, h), 1.0));
+      RunOptions options;
+      options.scene_path = file.path;
+      options.strict = true;  // an overlap or a retry-limit hit fails the run
+      const RunResult r = run_scene(options);
+      CHECK(r.stats.penetrations == 0);
+      CHECK(r.stats.retry_limit_hits == 0);
+      REQUIRE(!r.trace.samples.empty());
+      // The top box has not moved down: it still rests on the column below (the floor's
+      // microcollisions lift the column by at most ~0.1 mm).
+      const double z_top = r.trace.samples.back().back().x_W.z();
+      CHECK(z_top >= h / 2 + h * (n - 1) - 1e-9);
+      CHECK(z_top <= h / 2 + h * (n - 1) + 1e-3);
+    }
+  }
+}
+
+TEST_CASE("touching: pyramids whose boxes touch to within rounding load and run", "[tools][run]") {
+  // Accepted at the start (they were refused over ~1e-17 m). What they do next is the default
+  // model's: a box resting on two is not held (README), so only the start is asserted here.
+  for (double h : {0.1, 0.3}) {
+    for (int rows = 3; rows <= 6; ++rows) {
+      CAPTURE(h, rows);
+      const SceneFile file("pyramid", scene_of(pyramid(rows, h), 0.005));
+      RunOptions options;
+      options.scene_path = file.path;
+      const RunResult r = run_scene(options);
+      CHECK(r.stats.events > 0);
+    }
+  }
+}
+
+TEST_CASE("touching: a true overlap of 1e-9 m is refused, naming the file and both bodies",
+          "[tools][run]") {
+  for (double h : {0.1, 0.3}) {
+    CAPTURE(h);
+    const SceneFile file("overlap", scene_of(tower(2, h, 1e-9), 1.0));
+    RunOptions options;
+    options.scene_path = file.path;
+    CHECK_THROWS_WITH(run_scene(options), Catch::Contains(file.path) &&
+                                              Catch::Contains("\"box1\" overlaps body \"box0\"") &&
+                                              Catch::Contains("/bodies/2"));
+  }
+  // Side by side: the second box of a row pushed 1e-9 m into the first.
+  json bodies =
+      json::array({floor_body(), box("left", 0.1, 0.0, 0.05), box("right", 0.1, 0.1 - 1e-9, 0.05)});
+  const SceneFile file("overlap_side", scene_of(bodies, 1.0));
+  RunOptions options;
+  options.scene_path = file.path;
+  CHECK_THROWS_WITH(run_scene(options), Catch::Contains(file.path) &&
+                                            Catch::Contains("\"right\"") &&
+                                            Catch::Contains("\"left\""));
+}
+
+TEST_CASE("touching: bodies that touch and fly together are not penetrations (--strict)",
+          "[tools][run]") {
+  // Two spheres, and two boxes side by side, touching at the start and launched at the same
+  // velocity (with and without gravity): nothing brings them into overlap, and --strict passes.
+  for (bool gravity : {false, true}) {
+    for (bool boxes : {false, true}) {
+      CAPTURE(gravity, boxes);
+      json a, b;
+      if (boxes) {
+        a = box("a", 0.1, 0.0, 1.0);
+        b = box("b", 0.1, 0.1, 1.0);
+      } else {
+        a = {{"name", "a"},
+             {"mass", 1.0},
+             {"shape", {{"type", "sphere"}, {"radius", 0.05}}},
+             {"position", {0.0, 0.0, 1.0}}};
+        b = a;
+        b["name"] = "b";
+        b["position"] = {0.1, 0.0, 1.0};
+      }
+      a["velocity"] = b["velocity"] = {1.0, 0.3, 2.0};
+      json scene = scene_of(json::array({a, b}), 0.4);
+      if (!gravity) scene["gravity"] = {0, 0, 0};
+      const SceneFile file("fly", scene);
+      RunOptions options;
+      options.scene_path = file.path;
+      options.strict = true;
+      const RunResult r = run_scene(options);
+      CHECK(r.stats.penetrations == 0);
+      CHECK(r.stats.collisions + r.stats.microcollisions == 0);
+    }
+  }
+}
