@@ -418,6 +418,25 @@ DistanceResult piece_pair(const PosedPiece& a, const PosedPiece& b, FeaturePair&
   const double r2 = b.piece->radius;
   r.p1_W = core1_W - r1 * r.n_W;
   r.p2_W = core2_W + r2 * r.n_W;
+  const bool rounding_gap = v.status == ContactStatus::kSeparated && r1 + r2 == 0.0 &&
+                            v.distance <= 1e-14 * std::max({1.0, core1_W.cwiseAbs().maxCoeff(),
+                                                            core2_W.cwiseAbs().maxCoeff()});
+  if (rounding_gap) {
+    // Separated by no more than rounding, V-Clip's normal is the direction between two points
+    // a few ulps apart, any direction at all: a plank resting exactly on a cube of its own width
+    // came out with the normal along the faces' common side (y), so it was no cube's rider and
+    // fell through both. The axis of greatest separation among the separating-axis candidates
+    // is the contact's normal (the top face's, for a face on a face).
+    const FeatureMesh& ma = *a.piece->mesh;
+    const FeatureMesh& mb = *b.piece->mesh;
+    const double cost = static_cast<double>(ma.num_half_edges()) * mb.num_half_edges() / 4.0 *
+                        (ma.num_vertices() + mb.num_vertices());
+    if (cost <= kRoundingCheckBudget) {
+      Vec3 n_A = v.n_A;
+      mesh_overlap(ma, mb, R_AB, t_AB, n_A);
+      r.n_W = a.R_W * n_A;
+    }
+  }
   if (v.status == ContactStatus::kPenetrating && r1 + r2 == 0.0) {
     // Two polyhedra may overlap only by the rounding of their placement or their motion (boxes
     // stacked at z = h/2 + h i overlap by ~1e-17 m once one's vertices are mapped into the
