@@ -75,6 +75,12 @@ void ShapeGeometry::add_piece(const Shape& shape, const Vec3& p_M, const Mat3& R
 
 namespace {
 
+// The rounding of coordinates of size `scale` [m]: gaps and overlaps within it are touching
+// (about 45 ulps: the rounding of a placement and of a frame mapping is a few).
+double rounding_allowance(double scale) {
+  return 1e-14 * scale;
+}
+
 // Status and distance from a signed distance d (negative: overlap by -d): penetration is never
 // reported as a distance. An overlap within the rounding of coordinates of size `scale` (a few
 // ulp) is touching: two bodies resting on each other at a gap of zero are not overlapping.
@@ -82,7 +88,7 @@ void set_signed_distance(DistanceResult& r, double d, double scale) {
   if (d > 0.0) {
     r.status = ContactStatus::kSeparated;
     r.distance = d;
-  } else if (d >= -1e-14 * scale) {
+  } else if (d >= -rounding_allowance(scale)) {
     r.status = ContactStatus::kTouching;
     r.distance = 0.0;
   } else {
@@ -418,43 +424,31 @@ DistanceResult piece_pair(const PosedPiece& a, const PosedPiece& b, FeaturePair&
   const double r2 = b.piece->radius;
   r.p1_W = core1_W - r1 * r.n_W;
   r.p2_W = core2_W + r2 * r.n_W;
-  const bool rounding_gap = v.status == ContactStatus::kSeparated && r1 + r2 == 0.0 &&
-                            v.distance <= 1e-14 * std::max({1.0, core1_W.cwiseAbs().maxCoeff(),
-                                                            core2_W.cwiseAbs().maxCoeff()});
-  if (rounding_gap) {
-    // Separated by no more than rounding, V-Clip's normal is the direction between two points
-    // a few ulps apart, any direction at all: a plank resting exactly on a cube of its own width
-    // came out with the normal along the faces' common side (y), so it was no cube's rider and
-    // fell through both. The axis of greatest separation among the separating-axis candidates
-    // is the contact's normal (the top face's, for a face on a face).
+  if (r1 + r2 == 0.0 && (v.status == ContactStatus::kPenetrating ||
+                         v.status == ContactStatus::kSeparated)) {
+    // Two polyhedra within the rounding of their coordinates of each other (the rule of
+    // set_signed_distance for every other pair): boxes stacked at z = h/2 + h i overlap by
+    // ~1e-17 m once one's vertices are mapped into the other's frame, two touching boxes flying
+    // together by their rounded positions, a plank placed on a cube is 7e-18 m above it. There
+    // V-Clip's normal is the direction between two points a few ulps apart, any direction at all
+    // (a side face's, along which stacked boxes overlap fully; the faces' common side for a plank
+    // as wide as the cube, which was then no cube's rider and fell through both). The axis of
+    // least overlap (greatest separation) among the separating-axis candidates is the contact's
+    // normal, and overlapping by no more than rounding along it, they touch.
     const FeatureMesh& ma = *a.piece->mesh;
     const FeatureMesh& mb = *b.piece->mesh;
+    const double tolerance = rounding_allowance(
+        std::max({1.0, core1_W.cwiseAbs().maxCoeff(), core2_W.cwiseAbs().maxCoeff()}));
     const double cost = static_cast<double>(ma.num_half_edges()) * mb.num_half_edges() / 4.0 *
                         (ma.num_vertices() + mb.num_vertices());
-    if (cost <= kRoundingCheckBudget) {
+    const bool penetrating = v.status == ContactStatus::kPenetrating;
+    if ((penetrating || v.distance <= tolerance) && cost <= kRoundingCheckBudget &&
+        !(penetrating && vertex_deeper_than(ma, mb, R_AB, t_AB, tolerance))) {
       Vec3 n_A = v.n_A;
-      mesh_overlap(ma, mb, R_AB, t_AB, n_A);
-      r.n_W = a.R_W * n_A;
-    }
-  }
-  if (v.status == ContactStatus::kPenetrating && r1 + r2 == 0.0) {
-    // Two polyhedra may overlap only by the rounding of their placement or their motion (boxes
-    // stacked at z = h/2 + h i overlap by ~1e-17 m once one's vertices are mapped into the
-    // other's frame; two touching boxes flying together, by their rounded positions). Their
-    // least overlap over the separating-axis candidates bounds the depth from above; within the
-    // rounding of the coordinates (the rule of set_signed_distance for every other pair) they
-    // touch, along that axis. (V-Clip's own penetration normal may be a side face's, along which
-    // stacked boxes overlap fully.)
-    const FeatureMesh& ma = *a.piece->mesh;
-    const FeatureMesh& mb = *b.piece->mesh;
-    const double scale =
-        std::max({1.0, core1_W.cwiseAbs().maxCoeff(), core2_W.cwiseAbs().maxCoeff()});
-    const double tolerance = 1e-14 * scale;
-    const double cost = static_cast<double>(ma.num_half_edges()) * mb.num_half_edges() / 4.0 *
-                        (ma.num_vertices() + mb.num_vertices());
-    if (cost <= kRoundingCheckBudget && !vertex_deeper_than(ma, mb, R_AB, t_AB, tolerance)) {
-      Vec3 n_A = v.n_A;
-      if (mesh_overlap(ma, mb, R_AB, t_AB, n_A) <= tolerance) {
+      const double overlap = mesh_overlap(ma, mb, R_AB, t_AB, n_A);
+      if (!penetrating) {
+        r.n_W = a.R_W * n_A;
+      } else if (overlap <= tolerance) {
         r.status = ContactStatus::kTouching;
         r.distance = 0.0;
         r.n_W = a.R_W * n_A;

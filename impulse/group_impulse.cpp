@@ -333,4 +333,12 @@ GroupResult resolve_group(const std::vector<GroupBody>& bodies,
   return out;
 }
 
+Vec3 linear_momentum(const std::vector<GroupBody>& bodies, const std::vector<Vec3>& v_W) {
+  Vec3 p = Vec3::Zero();
+  for (std::size_t j = 0; j < bodies.size(); ++j) {
+    if (bodies[j].inv_mass > 0.0) p += v_W[j] / bodies[j].inv_mass;
+  }
+  return p;
+}
+
 }  // namespace palpable

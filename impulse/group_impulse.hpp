@@ -83,4 +83,8 @@ GroupResult resolve_group(const std::vector<GroupBody>& bodies,
                           const std::vector<GroupContact>& contacts,
                           const GroupOptions& options = {});
 
+// The linear momentum of the dynamic bodies (inv_mass > 0) moving at the velocities v_W [kg m/s]:
+// what a group conserves when no body is fixed.
+Vec3 linear_momentum(const std::vector<GroupBody>& bodies, const std::vector<Vec3>& v_W);
+
 }  // namespace palpable

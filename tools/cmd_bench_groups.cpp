@@ -124,31 +124,14 @@ RandomGroup patch_group(int k) {
   return g;
 }
 
-// Median over `repeats` of the mean time per group of one pass over `set`, each pass repeated
-// enough times to take ~5 ms.
+// Median over `repeats` of the mean time per group of one pass over `set`.
 double median_ns(const std::vector<RandomGroup>& set, int repeats, double& sink) {
   auto pass = [&] {
     for (const RandomGroup& g : set)
       sink += palpable::resolve_group(g.bodies, g.contacts).energy_after;
   };
-  int batch = 1;
-  for (;;) {
-    const auto start = std::chrono::steady_clock::now();
-    for (int i = 0; i < batch; ++i) pass();
-    const double dt =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (dt > 5e-3 || batch > (1 << 20)) break;
-    batch *= 2;
-  }
-  std::vector<double> per_group;
-  for (int r = 0; r < repeats; ++r) {
-    const auto start = std::chrono::steady_clock::now();
-    for (int i = 0; i < batch; ++i) pass();
-    const double dt =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    per_group.push_back(dt * 1e9 / (batch * static_cast<double>(set.size())));
-  }
-  return palpable::tools::median(per_group);
+  return palpable::tools::median_ns_per_call(pass, repeats, 1 << 20) /
+         static_cast<double>(set.size());
 }
 
 int run_cost(const std::vector<int>& ks, int repeats, int set_size, std::uint64_t seed) {

@@ -6,11 +6,10 @@
 #include "impulse/collision_matrix.hpp"
 #include "tools/commands.hpp"
 #include "tools/lib/exit_codes.hpp"
+#include "tools/lib/median.hpp"
 
 #include <nlohmann/json.hpp>
 
-#include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <iostream>
 #include <memory>
@@ -75,29 +74,10 @@ CollisionParameters params_for(const BenchCase& c, double tolerance) {
   return params;
 }
 
-// Median over `repeats` of the mean time per collision of a batch sized to take ~5 ms.
+// Median over `repeats` of the mean time per collision.
 double median_ns(const BenchCase& c, const CollisionParameters& params, int repeats, double& sink) {
-  int batch = 1;
-  for (;;) {
-    const auto start = std::chrono::steady_clock::now();
-    for (int i = 0; i < batch; ++i)
-      sink += palpable::integrate_collision(c.K, c.u0, params).p_c.z();
-    const double dt =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (dt > 5e-3 || batch > (1 << 24)) break;
-    batch *= 2;
-  }
-  std::vector<double> per_collision;
-  for (int r = 0; r < repeats; ++r) {
-    const auto start = std::chrono::steady_clock::now();
-    for (int i = 0; i < batch; ++i)
-      sink += palpable::integrate_collision(c.K, c.u0, params).p_c.z();
-    const double dt =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    per_collision.push_back(dt * 1e9 / batch);
-  }
-  std::nth_element(per_collision.begin(), per_collision.begin() + repeats / 2, per_collision.end());
-  return per_collision[repeats / 2];
+  return palpable::tools::median_ns_per_call(
+      [&] { sink += palpable::integrate_collision(c.K, c.u0, params).p_c.z(); }, repeats, 1 << 24);
 }
 
 nlohmann::json phases_of(const CollisionResult& r) {

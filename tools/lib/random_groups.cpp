@@ -10,14 +10,6 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-Vec3 momentum(const std::vector<GroupBody>& bodies, const std::vector<Vec3>& v) {
-  Vec3 p = Vec3::Zero();
-  for (std::size_t j = 0; j < bodies.size(); ++j) {
-    if (bodies[j].inv_mass > 0.0) p += v[j] / bodies[j].inv_mass;
-  }
-  return p;
-}
-
 }  // namespace
 
 double RandomGroups::uniform() {
@@ -97,8 +89,8 @@ GroupFigures group_figures(const RandomGroup& group, const GroupResult& r) {
   if (!group.with_fixed) {
     std::vector<Vec3> v0;
     for (const GroupBody& b : bodies) v0.push_back(b.v_W);
-    const Vec3 p0 = momentum(bodies, v0);
-    f.momentum_error = (momentum(bodies, r.v_W) - p0).norm() / (1 + p0.norm() + p_scale);
+    const Vec3 p0 = linear_momentum(bodies, v0);
+    f.momentum_error = (linear_momentum(bodies, r.v_W) - p0).norm() / (1 + p0.norm() + p_scale);
   }
   return f;
 }
