@@ -764,7 +764,7 @@ Island::PlanResult Island::plan(World& world, const std::vector<const ShapeGeome
     // before.)
     if (cause.kind != IslandEvent::Kind::kTip) {
       const std::vector<HeldContactMotion> now = held_velocities(p.bodies, p.contacts);
-      const HeldSolution statics = solve_held(p.bodies, p.contacts);
+      std::optional<HeldSolution> statics;  // solved only for a face that has such an edge
       for (std::size_t i = 0; i < p.contacts.size(); ++i) {
         HeldContact& c = p.contacts[i];
         if (!c.active || c.patch != PatchKind::kPolygon || c.mover < 0) continue;
@@ -785,12 +785,13 @@ Island::PlanResult Island::plan(World& world, const std::vector<const ShapeGeome
             edge = static_cast<int>(k);
           }
         }
-        if (edge < 0 || !(lowest <= still)) continue;
+        if (edge < 0 || !(lowest <= still) || !(highest > still)) continue;
+        if (!statics) statics = solve_held(p.bodies, p.contacts);
         const Vec2& a = c.polygon[static_cast<std::size_t>(edge)];
         const Vec2 d = c.polygon[(static_cast<std::size_t>(edge) + 1) % n] - a;
-        const bool tips = statics.status == HeldStatus::kOk &&
-                          cross2(d, statics.forces[i].centre_of_pressure - a) < 0.0;
-        if (!(tips && highest > still)) continue;
+        const bool tips = statics->status == HeldStatus::kOk &&
+                          cross2(d, statics->forces[i].centre_of_pressure - a) < 0.0;
+        if (!tips) continue;
         if (!forced) before = p.contacts;
         reduce_patch(c, edge);
         forced = true;
