@@ -446,12 +446,33 @@ DistanceResult piece_pair(const PosedPiece& a, const PosedPiece& b, FeaturePair&
         !(penetrating && vertex_deeper_than(ma, mb, R_AB, t_AB, tolerance))) {
       Vec3 n_A = v.n_A;
       const double overlap = mesh_overlap(ma, mb, R_AB, t_AB, n_A);
-      if (!penetrating) {
+      if (!penetrating || overlap <= tolerance) {
+        // The features and points follow the axis: each body's vertex furthest toward the other
+        // along it. V-Clip's are where it stopped, which for an overlap is any pair at all (a
+        // side edge of a stacked box, from which the contact's face cannot be found, so the
+        // patch was one corner and a tower's held contacts pushed at a single vertex).
+        int walk_steps = 0;
+        const int va = support_walk(ma, n_A, v.features.a.kind == FeatureKind::kVertex
+                                                 ? v.features.a.index
+                                                 : 0,
+                                    walk_steps);
+        const int vb = support_walk(mb, -(R_AB.transpose() * n_A),
+                                    v.features.b.kind == FeatureKind::kVertex ? v.features.b.index
+                                                                              : 0,
+                                    walk_steps);
+        r.steps += walk_steps;
+        r.feature1 = Feature::vertex(va);
+        r.feature2 = Feature::vertex(vb);
         r.n_W = a.R_W * n_A;
-      } else if (overlap <= tolerance) {
+        if (penetrating) {
+          // A separated pair keeps V-Clip's points: they are its closest points.
+          r.p1_W = a.x_W + a.R_W * ma.vertex(va);
+          r.p2_W = b.x_W + b.R_W * mb.vertex(vb);
+        }
+      }
+      if (penetrating && overlap <= tolerance) {
         r.status = ContactStatus::kTouching;
         r.distance = 0.0;
-        r.n_W = a.R_W * n_A;
         return r;
       }
     }
