@@ -4,6 +4,7 @@
 
 #include <Eigen/Dense>
 #include <Eigen/QR>
+#include <glpk.h>
 
 #include <algorithm>
 #include <cmath>
@@ -216,7 +217,12 @@ class Assembly {
     return after - before;
   }
 
-  HeldSolution solve() const {
+  // `feasible_forces`: where the system is redundant (a face on four coplanar corners, a box on
+  // two, boxes side by side) and the least-norm multipliers break an inequality (a contact that
+  // pulls, a centre of pressure outside its patch, friction beyond its cone), the multipliers are
+  // moved within the redundancy to meet every inequality if they can (feasible_multipliers). The
+  // accelerations do not change; only which forces carry them.
+  HeldSolution solve(bool feasible_forces = false) const {
     HeldSolution out;
     const std::size_t nb = bodies_.size();
     out.a_W.assign(nb, Vec3::Zero());
@@ -255,6 +261,7 @@ class Assembly {
         return out;
       }
       if (out.residual > 1e-8) out.status = HeldStatus::kInconsistent;
+      if (feasible_forces && out.status == HeldStatus::kOk) feasible_multipliers(lambda);
     }
     // Accelerations.
     std::vector<Vec6> acc = free;
@@ -343,6 +350,144 @@ class Assembly {
   struct Layout {
     Eigen::Index normal = -1, moment = -1, friction = -1, torsion = -1, rolling = -1;
   };
+
+  // One linear inequality on the multipliers: sum of coefficient * lambda(index) >= 0.
+  using Inequality = std::vector<std::pair<Eigen::Index, double>>;
+
+  // The inequalities of every active contact, as worst_violation judges them: N >= 0; the
+  // centre of pressure within the patch (linear in N and the moments); sticking friction,
+  // torsion and rolling within their bounds, the friction and rolling cones as inscribed 16-gons
+  // (meeting the polygon meets the cone).
+  std::vector<Inequality> inequalities() const {
+    constexpr int kSides = 16;
+    const double inscribed = std::cos(M_PI / kSides);
+    std::vector<Inequality> out;
+    auto cone = [&](Eigen::Index normal, Eigen::Index first, double bound) {
+      for (int j = 0; j < kSides; ++j) {
+        const double angle = 2.0 * M_PI * j / kSides;
+        out.push_back({{normal, bound * inscribed},
+                       {first, -std::cos(angle)},
+                       {first + 1, -std::sin(angle)}});
+      }
+    };
+    for (std::size_t i = 0; i < contacts_.size(); ++i) {
+      const HeldContact& c = contacts_[i];
+      if (!c.active) continue;
+      const Layout& l = layout_[i];
+      out.push_back({{l.normal, 1.0}});
+      if (c.patch == PatchKind::kPolygon) {
+        // inward . (N d - N p0) >= 0 with N d = (-M2, M1).
+        const std::size_t n = c.polygon.size();
+        for (std::size_t e = 0; e < n; ++e) {
+          const Vec2& p0 = c.polygon[e];
+          const Vec2 edge = c.polygon[(e + 1) % n] - p0;
+          const Vec2 inward = Vec2(-edge.y(), edge.x()) / edge.norm();
+          out.push_back(
+              {{l.normal, -inward.dot(p0)}, {l.moment, inward.y()}, {l.moment + 1, -inward.x()}});
+        }
+      } else if (c.patch == PatchKind::kSegment) {
+        // The centre of pressure -M / N within [lo, hi].
+        out.push_back({{l.normal, -c.segment_lo}, {l.moment, -1.0}});
+        out.push_back({{l.normal, c.segment_hi}, {l.moment, 1.0}});
+      }
+      if (l.friction >= 0) cone(l.normal, l.friction, c.friction);
+      if (l.torsion >= 0) {
+        out.push_back({{l.normal, c.torsion_arm}, {l.torsion, -1.0}});
+        out.push_back({{l.normal, c.torsion_arm}, {l.torsion, 1.0}});
+      }
+      if (l.rolling >= 0) cone(l.normal, l.rolling, c.rolling_resistance);
+    }
+    return out;
+  }
+
+  // Moves `lambda` by a multiplier combination that applies no net wrench to any body (so the
+  // accelerations stay, and every row's value) until every inequality holds, if one does: the
+  // linear programme "maximise the least margin t, capped at 1 % of the largest normal force"
+  // over that null space, by GLPK's simplex; a margin of -1e-9 of that force is rounding (a
+  // margin that is zero in every solution: a side contact that carries nothing). Returns
+  // whether lambda changed.
+  bool feasible_multipliers(VecX& lambda) const {
+    const Eigen::Index m = lambda.size();
+    const std::vector<Inequality> g = inequalities();
+    double scale = 0.0;
+    for (std::size_t i = 0; i < contacts_.size(); ++i) {
+      if (contacts_[i].active) scale = std::max(scale, std::abs(lambda(layout_[i].normal)));
+    }
+    if (!(scale > 0.0)) return false;
+    auto value = [](const Inequality& row, const VecX& x) {
+      double sum = 0.0;
+      for (const auto& [index, coefficient] : row) sum += coefficient * x(index);
+      return sum;
+    };
+    auto norm = [](const Inequality& row) {
+      double sum = 0.0;
+      for (const auto& entry : row) sum += entry.second * entry.second;
+      return std::sqrt(sum);
+    };
+    bool violated = false;
+    for (const Inequality& row : g) violated = violated || value(row, lambda) < 0.0;
+    if (!violated) return false;
+    // The null space of the wrench map: lambda -> the net wrench on each body.
+    const Eigen::Index nb = static_cast<Eigen::Index>(bodies_.size());
+    MatX B = MatX::Zero(6 * nb, m);
+    for (Eigen::Index j = 0; j < m; ++j) {
+      const Row& r = rows_[static_cast<std::size_t>(j)];
+      for (int q = 0; q < 2; ++q) {
+        if (r.body[q] >= 0) B.block<6, 1>(6 * r.body[q], j) += r.W[q];
+      }
+    }
+    Eigen::ColPivHouseholderQR<MatX> qr(B.transpose());
+    const Eigen::Index rank = qr.rank();
+    const Eigen::Index k = m - rank;
+    if (k == 0) return false;
+    const MatX Z = (qr.householderQ() * MatX::Identity(m, m)).rightCols(k);
+    // Columns y (k, free) and t (<= 1 % of the largest N); rows: (g Z) y - |g| t >= -g lambda.
+    glp_prob* lp = glp_create_prob();
+    glp_set_obj_dir(lp, GLP_MAX);
+    const int rows = static_cast<int>(g.size());
+    const int cols = static_cast<int>(k) + 1;
+    glp_add_rows(lp, rows);
+    glp_add_cols(lp, cols);
+    for (int c = 1; c < cols; ++c) glp_set_col_bnds(lp, c, GLP_FR, 0.0, 0.0);
+    glp_set_col_bnds(lp, cols, GLP_UP, 0.0, 0.01 * scale);
+    glp_set_obj_coef(lp, cols, 1.0);
+    std::vector<int> ia{0}, ja{0};
+    std::vector<double> ar{0.0};
+    for (int r = 0; r < rows; ++r) {
+      const Inequality& row = g[static_cast<std::size_t>(r)];
+      glp_set_row_bnds(lp, r + 1, GLP_LO, -value(row, lambda), 0.0);
+      for (Eigen::Index c = 0; c < k; ++c) {
+        double coefficient = 0.0;
+        for (const auto& [index, a] : row) coefficient += a * Z(index, c);
+        if (coefficient != 0.0) {
+          ia.push_back(r + 1);
+          ja.push_back(static_cast<int>(c) + 1);
+          ar.push_back(coefficient);
+        }
+      }
+      ia.push_back(r + 1);
+      ja.push_back(cols);
+      ar.push_back(-norm(row));
+    }
+    glp_load_matrix(lp, static_cast<int>(ia.size()) - 1, ia.data(), ja.data(), ar.data());
+    glp_smcp parameters;
+    glp_init_smcp(&parameters);
+    parameters.msg_lev = GLP_MSG_OFF;
+    const int code = glp_simplex(lp, &parameters);
+    bool changed = false;
+    if (code == 0 && glp_get_status(lp) == GLP_OPT &&
+        glp_get_obj_val(lp) >= -1e-9 * scale) {
+      VecX y(k);
+      for (Eigen::Index c = 0; c < k; ++c) y(c) = glp_get_col_prim(lp, static_cast<int>(c) + 1);
+      const VecX moved = lambda + Z * y;
+      if (moved.allFinite()) {
+        lambda = moved;
+        changed = true;
+      }
+    }
+    glp_delete_prob(lp);
+    return changed;
+  }
 
   Vec6 apply_inverse_mass(int body, const Vec6& w) const {
     const HeldBody& b = bodies_[static_cast<std::size_t>(body)];
@@ -476,8 +621,8 @@ std::string_view to_string(HeldStatus status) {
 }
 
 HeldSolution solve_held(const std::vector<HeldBody>& bodies,
-                        const std::vector<HeldContact>& contacts) {
-  return Assembly(bodies, contacts).solve();
+                        const std::vector<HeldContact>& contacts, bool feasible_forces) {
+  return Assembly(bodies, contacts).solve(feasible_forces);
 }
 
 std::vector<HeldContactMotion> held_velocities(const std::vector<HeldBody>& bodies,
@@ -644,7 +789,7 @@ HeldModes choose_held_modes(const std::vector<HeldBody>& bodies, std::vector<Hel
   if (!(acceleration_scale > 0.0)) acceleration_scale = 1.0;
   std::vector<int> returned;  // contacts brought back, once each (no cycling between two sets)
   for (;;) {
-    out.solution = solve_held(bodies, contacts);
+    out.solution = solve_held(bodies, contacts, /*feasible_forces=*/true);
     if (out.solution.status != HeldStatus::kOk) return out;
     const HeldViolation v = worst_violation(contacts, out.solution, tolerance);
     if (v.kind == HeldViolation::Kind::kNone) {

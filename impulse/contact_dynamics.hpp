@@ -148,9 +148,12 @@ struct HeldSolution {
   double residual = 0.0;  // of the linear system, relative
 };
 
-// The accelerations and wrenches for the given modes.
+// The accelerations and wrenches for the given modes. `feasible_forces`: where the held
+// constraints are redundant and the least-norm wrenches break an inequality of worst_violation,
+// the wrenches that meet them all if any do (a linear programme over the redundancy; the
+// accelerations are the same).
 HeldSolution solve_held(const std::vector<HeldBody>& bodies,
-                        const std::vector<HeldContact>& contacts);
+                        const std::vector<HeldContact>& contacts, bool feasible_forces = false);
 
 // The relative motion (s, dw) at every contact, without accelerations (for choosing modes).
 std::vector<HeldContactMotion> held_velocities(const std::vector<HeldBody>& bodies,

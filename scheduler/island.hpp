@@ -130,6 +130,10 @@ class Island {
   // reads and clears it). A plan after a collision or a hold has none.
   IslandEvent trigger;
   int stalls = 0;
+  // Held contacts joined it at this instant and it has not been planned since: its plan waits
+  // for an island event at that instant, after the instant's pair checks (so contacts that meet
+  // together, a stack placed touching, are planned together, not one by one).
+  bool plan_pending = false;
 
   // What plan() found.
   struct PlanResult {

@@ -20,7 +20,7 @@ namespace palpable {
 // ---------------------------------------------------------------- pairs and bounds
 
 void Simulation::Impl::refresh_broad_phase(BodyId id, double t) {
-  if (const Island* is = island(id)) {
+  if (const Island* is = planned_island(id)) {
     const Island::MotionBound b = is->bound(static_cast<std::size_t>(is->index_of(id)));
     const HeldMotion held{b.a_W, b.a_slack};
     pairs.refresh(id, extrapolate(id, t), t, &held);
@@ -140,7 +140,7 @@ bool Simulation::Impl::lifting(const PairSet::Pair& p, const Contact& c, double 
 
 ToiMotion Simulation::Impl::motion_for(BodyId id, const BodyState& s, const BodyState& other,
                                        BodyId other_id) const {
-  if (const Island* is = island(id)) {
+  if (const Island* is = planned_island(id)) {
     const Island::MotionBound b = is->bound(static_cast<std::size_t>(is->index_of(id)));
     ToiMotion m;
     m.v_W = s.v_W;

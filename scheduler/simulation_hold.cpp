@@ -81,6 +81,11 @@ void Simulation::Impl::hold(std::uint32_t index, const HeldLink& link, const Dis
   std::vector<BodyId> dynamic;
   for (BodyId id : {p.a, p.b}) {
     if (body(id).is_dynamic()) dynamic.push_back(id);
+    // Every body of an island joined here is brought to t by its island's plan, while that plan
+    // still stands: until the island is planned again they are states at t (plan_pending).
+    if (const Island* is = island(id)) {
+      for (BodyId other : is->bodies) commit(other, t);
+    }
   }
   const std::uint32_t i = join(dynamic, t);
   islands[i].links.push_back(link);
@@ -90,7 +95,26 @@ void Simulation::Impl::hold(std::uint32_t index, const HeldLink& link, const Dis
   }
   ++stats.holds;
   report("hold", p.a, p.b, dr.p2_W, t);
-  replan(i, t);
+  defer_plan(i, t);
+}
+
+void Simulation::Impl::defer_plan(std::uint32_t i, double t) {
+  islands[i].plan_pending = true;
+  put_island_event(i, t);
+}
+
+void Simulation::Impl::put_island_event(std::uint32_t i, double t) {
+  const Island& is = islands[i];
+  Event e;
+  e.t = t;
+  e.kind = EventKind::kIsland;
+  e.a = *std::min_element(is.bodies.begin(), is.bodies.end());
+  e.owner = i;
+  if (island_events[i] == EventQueue::kNoEvent) {
+    island_events[i] = queue.push(e);
+  } else {
+    queue.update(island_events[i], e);
+  }
 }
 
 std::uint32_t Simulation::Impl::join(const std::vector<BodyId>& ids, double t) {
@@ -109,6 +133,7 @@ std::uint32_t Simulation::Impl::join(const std::vector<BodyId>& ids, double t) {
         island_of[b.index] = target;
       }
       to.links.insert(to.links.end(), from.links.begin(), from.links.end());
+      to.plan_pending = to.plan_pending || from.plan_pending;
       release_slot(static_cast<std::uint32_t>(i));
     }
   }
@@ -156,6 +181,7 @@ void Simulation::Impl::replan(std::uint32_t i, double t) {
     const std::uint32_t k = todo.back();
     todo.pop_back();
     Island& is = islands[k];
+    is.plan_pending = false;
     const Island::PlanResult r = is.plan(world, geometries, t);
     ++stats.island_plans;
     if (r.inconsistent) ++stats.held_inconsistent;
@@ -271,22 +297,17 @@ void Simulation::Impl::schedule_island(std::uint32_t i, double t) {
     island_events[i] = EventQueue::kNoEvent;
     return;
   }
-  Event e;
-  e.t = std::max(is.t_end, t);
-  e.kind = EventKind::kIsland;
-  e.a = *std::min_element(is.bodies.begin(), is.bodies.end());
-  e.owner = i;
-  if (island_events[i] == EventQueue::kNoEvent) {
-    island_events[i] = queue.push(e);
-  } else {
-    queue.update(island_events[i], e);
-  }
+  put_island_event(i, std::max(is.t_end, t));
 }
 
 void Simulation::Impl::island_event(std::uint32_t i, double t) {
   island_events[i] = EventQueue::kNoEvent;
   Island& is = islands[i];
   for (BodyId id : is.bodies) commit(id, t);
+  if (is.plan_pending) {  // contacts held at this instant, all in now
+    replan(i, t);
+    return;
+  }
   ++stats.mode_changes;
   const IslandEvent ev = is.event;
   is.trigger = ev;

@@ -56,10 +56,17 @@ struct Simulation::Impl {
     return i >= 0 ? &islands[static_cast<std::size_t>(i)] : nullptr;
   }
 
+  // The island of a held body whose motion is planned, or null (free flight: not held, or held
+  // at this instant and its plan pending).
+  const Island* planned_island(BodyId id) const {
+    const Island* is = island(id);
+    return is && !is->plan_pending ? is : nullptr;
+  }
+
   BodyState extrapolate(BodyId id, double t) const {
     const Body& b = body(id);
     if (t <= b.state.t) return b.state;
-    if (const Island* is = island(id)) {
+    if (const Island* is = planned_island(id)) {
       return is->state_at(static_cast<std::size_t>(is->index_of(id)), t);
     }
     return advance(b, b.state, t, world.gravity_W, settings());
@@ -70,7 +77,7 @@ struct Simulation::Impl {
   }
   // A held body's acceleration (its island's), or null for free flight.
   const Vec3* held_acceleration(BodyId id) const {
-    const Island* is = island(id);
+    const Island* is = planned_island(id);
     return is ? &is->acceleration(static_cast<std::size_t>(is->index_of(id))) : nullptr;
   }
   ContactSide side(BodyId id, const BodyState& s) const {
@@ -222,6 +229,10 @@ struct Simulation::Impl {
   std::vector<std::uint32_t> split(std::uint32_t k, double t, bool& changed);
 
   void schedule_island(std::uint32_t i, double t);
+  // Plans island i by an island event at t, after the pair checks at t (Island::plan_pending).
+  void defer_plan(std::uint32_t i, double t);
+  // Island i's event at time t (pushed, or moved there).
+  void put_island_event(std::uint32_t i, double t);
 
   // Island i's motion reached its next event at time t: a mode change.
   void island_event(std::uint32_t i, double t);

@@ -173,7 +173,7 @@ void check_exactly_still(const RunResult& r) {
   }
 }
 
-TEST_CASE("touching under the persistent model: towers and planks placed exactly rest exactly at once",
+TEST_CASE("touching under the persistent model: towers, pyramids and planks placed exactly rest exactly at once",
           "[tools][run]") {
   // The pairs are held at t = 0 with their whole faces. Before, two polyhedra touching by
   // rounding kept V-Clip's features (a side edge of a stacked box), the patch was one corner,
@@ -186,6 +186,27 @@ TEST_CASE("touching under the persistent model: towers and planks placed exactly
       CHECK(r.stats.penetrations == 0);
       CHECK(r.stats.collisions <= static_cast<std::uint64_t>(n));  // one, at t = 0, per contact
       check_exactly_still(r);
+    }
+  }
+  // Pyramids: each box on two, side by side with its neighbours. Their held problem is
+  // redundant; its least-norm forces pull at some contacts, which were let go one after another
+  // (and every pair's hold planned the island alone, before the others were in).
+  for (int rows : {3, 4}) {
+    CAPTURE(rows);
+    const RunResult r = run_persistent_strict("pyramid_persistent", pyramid(rows, 0.1));
+    CHECK(r.stats.penetrations == 0);
+    check_exactly_still(r);
+  }
+  {
+    // Six rows: the zero-speed collisions of its 66 pairs at t = 0 leave ~1e-24 m of rounding.
+    const RunResult r = run_persistent_strict("pyramid_persistent", pyramid(6, 0.1));
+    CHECK(r.stats.penetrations == 0);
+    const auto& first = r.trace.samples.front();
+    for (const auto& sample : r.trace.samples) {
+      for (std::size_t i = 0; i < sample.size(); ++i) {
+        CHECK((sample[i].x_W - first[i].x_W).norm() <= 1e-15);
+        CHECK(sample[i].v_W.norm() == 0.0);
+      }
     }
   }
   for (double mass : {1.0, 5.0}) {
