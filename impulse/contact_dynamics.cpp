@@ -59,6 +59,7 @@ struct Row {
   int body[2] = {-1, -1};
   Vec6 J[2] = {Vec6::Zero(), Vec6::Zero()};  // on (a, alpha) of body[k]
   Vec6 W[2] = {Vec6::Zero(), Vec6::Zero()};  // (force, torque) per unit multiplier
+  Vec6 MW[2] = {Vec6::Zero(), Vec6::Zero()};  // the accelerations W gives body[k] (M^-1 W)
   double bias = 0.0;
 };
 
@@ -208,7 +209,7 @@ class Assembly {
       for (int q = 0; q < 2; ++q) {
         if (r.body[q] < 0) continue;
         HeldBody& b = bodies[static_cast<std::size_t>(r.body[q])];
-        const Vec6 dv = p(j) * asm_.apply_inverse_mass(r.body[q], r.W[q]);
+        const Vec6 dv = p(j) * r.MW[q];
         b.v_W += dv.head<3>();
         b.w_W += dv.tail<3>();
       }
@@ -270,7 +271,7 @@ class Assembly {
       for (int p = 0; p < 2; ++p) {
         if (r.body[p] >= 0) {
           acc[static_cast<std::size_t>(r.body[p])] +=
-              lambda(j) * apply_inverse_mass(r.body[p], r.W[p]);
+              lambda(j) * r.MW[p];
         }
       }
     }
@@ -340,7 +341,7 @@ class Assembly {
     for (int p = 0; p < 2; ++p) {
       for (int q = 0; q < 2; ++q) {
         if (ri.body[p] >= 0 && ri.body[p] == rj.body[q]) {
-          sum += ri.J[p].dot(apply_inverse_mass(ri.body[p], rj.W[q]));
+          sum += ri.J[p].dot(rj.MW[q]);
         }
       }
     }
@@ -440,7 +441,10 @@ class Assembly {
     const Eigen::Index rank = qr.rank();
     const Eigen::Index k = m - rank;
     if (k == 0) return false;
-    const MatX Z = (qr.householderQ() * MatX::Identity(m, m)).rightCols(k);
+    // Q's last k columns: Q applied to them alone (Q has only as many reflectors as B has rows).
+    MatX Z = MatX::Zero(m, k);
+    Z.bottomRows(k).setIdentity();
+    Z.applyOnTheLeft(qr.householderQ());
     // Columns y (k, free) and t (<= 1 % of the largest N); rows: (g Z) y - |g| t >= -g lambda.
     glp_prob* lp = glp_create_prob();
     glp_set_obj_dir(lp, GLP_MAX);
@@ -597,7 +601,10 @@ class Assembly {
     }
   }
 
-  Eigen::Index push(const Row& r) {
+  Eigen::Index push(Row r) {
+    for (int q = 0; q < 2; ++q) {
+      if (r.body[q] >= 0) r.MW[q] = apply_inverse_mass(r.body[q], r.W[q]);
+    }
     rows_.push_back(r);
     return static_cast<Eigen::Index>(rows_.size() - 1);
   }
