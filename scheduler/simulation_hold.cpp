@@ -96,6 +96,16 @@ void Simulation::Impl::hold(std::uint32_t index, const HeldLink& link, const Dis
   ++stats.holds;
   report("hold", p.a, p.b, dr.p2_W, t);
   defer_plan(i, t);
+  // The other pairs of the bodies just held are checked at this instant too, before the plan: a
+  // body stopped now is met now by what it carries and by its neighbours (a box riding on it,
+  // touching and falling with it until now, whose pair had no event), and the island is
+  // planned with all of them, not with a part that is no equilibrium (a box held on one of its
+  // two supports tips; contacts let go there came back at once, round after round).
+  for (BodyId id : dynamic) {
+    for (std::uint32_t q : pairs.body(id).pairs) {
+      if (q != index && !pairs.pair(q).held) schedule_pair(q, t);
+    }
+  }
 }
 
 void Simulation::Impl::defer_plan(std::uint32_t i, double t) {

@@ -76,7 +76,11 @@ struct Simulation::Impl {
     if (t > b.state.t) b.state = extrapolate(id, t);
   }
   // A held body's acceleration (its island's), or null for free flight.
+  // A body held at this instant whose island's plan is pending counts as held still (zero): it
+  // was just stopped along its contact, and what touches it now meets it (hold()).
   const Vec3* held_acceleration(BodyId id) const {
+    static const Vec3 kStill = Vec3::Zero();
+    if (const Island* is = island(id); is && is->plan_pending) return &kStill;
     const Island* is = planned_island(id);
     return is ? &is->acceleration(static_cast<std::size_t>(is->index_of(id))) : nullptr;
   }
