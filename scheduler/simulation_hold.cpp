@@ -96,14 +96,19 @@ void Simulation::Impl::hold(std::uint32_t index, const HeldLink& link, const Dis
   ++stats.holds;
   report("hold", p.a, p.b, dr.p2_W, t);
   defer_plan(i, t);
-  // The other pairs of the bodies just held are checked at this instant too, before the plan: a
-  // body stopped now is met now by what it carries and by its neighbours (a box riding on it,
-  // touching and falling with it until now, whose pair had no event), and the island is
-  // planned with all of them, not with a part that is no equilibrium (a box held on one of its
-  // two supports tips; contacts let go there came back at once, round after round).
+  // The other pairs of the bodies just held, with a body in free flight (or held at this
+  // instant too), are checked at this instant, before the plan: a body stopped now is met now by
+  // what it carries and by its neighbours (a box riding on it, touching and falling with it
+  // until now, whose pair had no event), and the island is planned with all of them, not with a
+  // part that is no equilibrium (a box held on one of its two supports tips; contacts let go
+  // there came back at once, round after round). Pairs with a body already planned keep their
+  // bounds: re-checking those too made a pile of 50 hulls 7.6x slower (195 s against 25.8 s).
   for (BodyId id : dynamic) {
     for (std::uint32_t q : pairs.body(id).pairs) {
-      if (q != index && !pairs.pair(q).held) schedule_pair(q, t);
+      const PairSet::Pair& other_pair = pairs.pair(q);
+      if (q == index || other_pair.held) continue;
+      const Island* other = island(other_pair.a == id ? other_pair.b : other_pair.a);
+      if (!other || other->plan_pending) schedule_pair(q, t);
     }
   }
 }
