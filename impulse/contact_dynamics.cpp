@@ -382,6 +382,7 @@ class Assembly {
         for (std::size_t e = 0; e < n; ++e) {
           const Vec2& p0 = c.polygon[e];
           const Vec2 edge = c.polygon[(e + 1) % n] - p0;
+          if (!(edge.norm() > 0.0)) continue;  // a repeated vertex bounds nothing
           const Vec2 inward = Vec2(-edge.y(), edge.x()) / edge.norm();
           out.push_back(
               {{l.normal, -inward.dot(p0)}, {l.moment, inward.y()}, {l.moment + 1, -inward.x()}});
@@ -428,6 +429,13 @@ class Assembly {
     bool violated = false;
     for (const Inequality& row : g) violated = violated || value(row, lambda) < 0.0;
     if (!violated) return false;
+    // GLPK is given finite numbers only (it stops the process on some invalid input).
+    for (const Inequality& row : g) {
+      for (const auto& entry : row) {
+        if (!std::isfinite(entry.second)) return false;
+      }
+    }
+    if (!lambda.allFinite()) return false;
     // The null space of the wrench map: lambda -> the net wrench on each body.
     const Eigen::Index nb = static_cast<Eigen::Index>(bodies_.size());
     MatX B = MatX::Zero(6 * nb, m);
@@ -445,6 +453,7 @@ class Assembly {
     MatX Z = MatX::Zero(m, k);
     Z.bottomRows(k).setIdentity();
     Z.applyOnTheLeft(qr.householderQ());
+    if (!Z.allFinite()) return false;
     // Columns y (k, free) and t (<= 1 % of the largest N); rows: (g Z) y - |g| t >= -g lambda.
     glp_prob* lp = glp_create_prob();
     glp_set_obj_dir(lp, GLP_MAX);

@@ -393,5 +393,13 @@ TEST_CASE("held: a pyramid of boxes at rest is held by forces that meet every in
     const HeldModes m = choose_held_modes(bodies, chosen, 1e-12, 1e-9);
     CHECK(m.changes == 0);
     CHECK(m.released.empty());
+    // A patch with a repeated vertex (a zero-length edge) bounds nothing more: the same answer.
+    std::vector<HeldContact> repeated = contacts;
+    for (HeldContact& k : repeated) {
+      if (k.patch == PatchKind::kPolygon) k.polygon.insert(k.polygon.begin(), k.polygon.front());
+    }
+    const HeldSolution again = solve_held(bodies, repeated, /*feasible_forces=*/true);
+    REQUIRE(again.status == HeldStatus::kOk);
+    CHECK(worst_violation(repeated, again, 1e-9).kind == HeldViolation::Kind::kNone);
   }
 }
