@@ -264,10 +264,11 @@ Vec3 core_support(const PosedPiece& p, const Vec3& direction_W, const Vec3& orig
   return (p.x_W - origin_W) + p.R_W * s_M;
 }
 
-// The feature reported for a piece in a GJK pair: a polyhedron's vertex furthest toward the other
-// body (the patch search in contact_feature looks at the faces and edges around it), else the
-// single "vertex" of a point or smooth core.
-Feature gjk_feature(const PosedPiece& p, const Vec3& toward_other_W) {
+// The feature reported for a piece when the normal, not a feature walk, decides the contact (a GJK
+// pair; two polyhedra touching by rounding): a polyhedron's vertex furthest toward the other body
+// (the patch search in contact_feature looks at the faces and edges around it), else the single
+// "vertex" of a point or smooth core.
+Feature support_feature(const PosedPiece& p, const Vec3& toward_other_W) {
   if (p.piece->kind != PieceKind::kPolyhedron) return Feature::vertex(0);
   int steps = 0;
   return Feature::vertex(
@@ -316,8 +317,8 @@ bool snap_to_face(const PosedPiece& a, const PosedPiece& b, DistanceResult& r, d
   r.n_W = b_poly ? n_W : Vec3(-n_W);
   r.p1_W = b_poly ? on_round_W : on_face_W;
   r.p2_W = b_poly ? on_face_W : on_round_W;
-  r.feature1 = gjk_feature(a, -r.n_W);
-  r.feature2 = gjk_feature(b, r.n_W);
+  r.feature1 = support_feature(a, -r.n_W);
+  r.feature2 = support_feature(b, r.n_W);
   set_signed_distance(r, d, scale);
   return true;
 }
@@ -355,8 +356,8 @@ DistanceResult smooth_pair(const PosedPiece& a, const PosedPiece& b) {
     r.n_W = (a.x_W - b.x_W).normalized();
     r.p1_W = origin_W + g.p_a;
     r.p2_W = origin_W + g.p_b;
-    r.feature1 = gjk_feature(a, -r.n_W);
-    r.feature2 = gjk_feature(b, r.n_W);
+    r.feature1 = support_feature(a, -r.n_W);
+    r.feature2 = support_feature(b, r.n_W);
     const bool touching = g.status == GjkResult::Status::kTouching && r1 + r2 == 0.0;
     r.status = touching ? ContactStatus::kTouching : ContactStatus::kPenetrating;
     r.distance = 0.0;
@@ -367,8 +368,8 @@ DistanceResult smooth_pair(const PosedPiece& a, const PosedPiece& b) {
   r.n_W = (g.p_a - g.p_b).normalized();
   r.p1_W = core1_W - r1 * r.n_W;
   r.p2_W = core2_W + r2 * r.n_W;
-  r.feature1 = gjk_feature(a, -r.n_W);
-  r.feature2 = gjk_feature(b, r.n_W);
+  r.feature1 = support_feature(a, -r.n_W);
+  r.feature2 = support_feature(b, r.n_W);
   set_signed_distance(r, g.distance - r1 - r2, std::max(1.0, scale));
   if (r.status == ContactStatus::kSeparated) snap_to_face(a, b, r, std::max(1.0, scale));
   return r;
@@ -424,8 +425,8 @@ DistanceResult piece_pair(const PosedPiece& a, const PosedPiece& b, FeaturePair&
   const double r2 = b.piece->radius;
   r.p1_W = core1_W - r1 * r.n_W;
   r.p2_W = core2_W + r2 * r.n_W;
-  if (r1 + r2 == 0.0 && (v.status == ContactStatus::kPenetrating ||
-                         v.status == ContactStatus::kSeparated)) {
+  if (r1 + r2 == 0.0 &&
+      (v.status == ContactStatus::kPenetrating || v.status == ContactStatus::kSeparated)) {
     // Two polyhedra within the rounding of their coordinates of each other (the rule of
     // set_signed_distance for every other pair): boxes stacked at z = h/2 + h i overlap by
     // ~1e-17 m once one's vertices are mapped into the other's frame, two touching boxes flying
@@ -451,23 +452,13 @@ DistanceResult piece_pair(const PosedPiece& a, const PosedPiece& b, FeaturePair&
         // along it. V-Clip's are where it stopped, which for an overlap is any pair at all (a
         // side edge of a stacked box, from which the contact's face cannot be found, so the
         // patch was one corner and a tower's held contacts pushed at a single vertex).
-        int walk_steps = 0;
-        const int va = support_walk(ma, n_A, v.features.a.kind == FeatureKind::kVertex
-                                                 ? v.features.a.index
-                                                 : 0,
-                                    walk_steps);
-        const int vb = support_walk(mb, -(R_AB.transpose() * n_A),
-                                    v.features.b.kind == FeatureKind::kVertex ? v.features.b.index
-                                                                              : 0,
-                                    walk_steps);
-        r.steps += walk_steps;
-        r.feature1 = Feature::vertex(va);
-        r.feature2 = Feature::vertex(vb);
         r.n_W = a.R_W * n_A;
+        r.feature1 = support_feature(a, -r.n_W);
+        r.feature2 = support_feature(b, r.n_W);
         if (penetrating) {
           // A separated pair keeps V-Clip's points: they are its closest points.
-          r.p1_W = a.x_W + a.R_W * ma.vertex(va);
-          r.p2_W = b.x_W + b.R_W * mb.vertex(vb);
+          r.p1_W = a.x_W + a.R_W * ma.vertex(r.feature1.index);
+          r.p2_W = b.x_W + b.R_W * mb.vertex(r.feature2.index);
         }
       }
       if (penetrating && overlap <= tolerance) {

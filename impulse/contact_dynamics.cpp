@@ -2,9 +2,9 @@
 
 #include "impulse/contact_torque.hpp"
 
+#include <glpk.h>
 #include <Eigen/Dense>
 #include <Eigen/QR>
-#include <glpk.h>
 
 #include <algorithm>
 #include <cmath>
@@ -57,8 +57,8 @@ Side support_side(const HeldContact& c, const std::vector<HeldBody>& bodies) {
 struct Row {
   int contact = 0;
   int body[2] = {-1, -1};
-  Vec6 J[2] = {Vec6::Zero(), Vec6::Zero()};  // on (a, alpha) of body[k]
-  Vec6 W[2] = {Vec6::Zero(), Vec6::Zero()};  // (force, torque) per unit multiplier
+  Vec6 J[2] = {Vec6::Zero(), Vec6::Zero()};   // on (a, alpha) of body[k]
+  Vec6 W[2] = {Vec6::Zero(), Vec6::Zero()};   // (force, torque) per unit multiplier
   Vec6 MW[2] = {Vec6::Zero(), Vec6::Zero()};  // the accelerations W gives body[k] (M^-1 W)
   double bias = 0.0;
 };
@@ -126,6 +126,20 @@ Vec3 in_plane(const HeldContact& c, const Vec2& v) {
 }
 Vec2 plane_coords(const HeldContact& c, const Vec3& v) {
   return Vec2(v.dot(c.t1_W), v.dot(c.t2_W));
+}
+
+// The centre of pressure c + n x M / N on the inner side of edge e of a polygon patch, as a
+// linear inequality a . (N, M1, M2) >= 0, unit in the edge's inward normal (with N d = (-M2, M1):
+// inward . (N d - N p0) >= 0). False for a zero-length edge (a repeated vertex), which bounds
+// nothing.
+bool polygon_edge_inequality(const HeldContact& c, std::size_t e, Vec3& a) {
+  const Vec2& p0 = c.polygon[e];
+  const Vec2 edge = c.polygon[(e + 1) % c.polygon.size()] - p0;
+  const double length = edge.norm();
+  if (!(length > 0.0)) return false;
+  const Vec2 inward = Vec2(-edge.y(), edge.x()) / length;
+  a = Vec3(-inward.dot(p0), inward.y(), -inward.x());
+  return true;
 }
 
 // The length over which a contact's relative spin about n is measured: the patch's mean radius
@@ -270,8 +284,7 @@ class Assembly {
       const Row& r = rows_[static_cast<std::size_t>(j)];
       for (int p = 0; p < 2; ++p) {
         if (r.body[p] >= 0) {
-          acc[static_cast<std::size_t>(r.body[p])] +=
-              lambda(j) * r.MW[p];
+          acc[static_cast<std::size_t>(r.body[p])] += lambda(j) * r.MW[p];
         }
       }
     }
@@ -377,15 +390,10 @@ class Assembly {
       const Layout& l = layout_[i];
       out.push_back({{l.normal, 1.0}});
       if (c.patch == PatchKind::kPolygon) {
-        // inward . (N d - N p0) >= 0 with N d = (-M2, M1).
-        const std::size_t n = c.polygon.size();
-        for (std::size_t e = 0; e < n; ++e) {
-          const Vec2& p0 = c.polygon[e];
-          const Vec2 edge = c.polygon[(e + 1) % n] - p0;
-          if (!(edge.norm() > 0.0)) continue;  // a repeated vertex bounds nothing
-          const Vec2 inward = Vec2(-edge.y(), edge.x()) / edge.norm();
-          out.push_back(
-              {{l.normal, -inward.dot(p0)}, {l.moment, inward.y()}, {l.moment + 1, -inward.x()}});
+        Vec3 a;
+        for (std::size_t e = 0; e < c.polygon.size(); ++e) {
+          if (!polygon_edge_inequality(c, e, a)) continue;
+          out.push_back({{l.normal, a.x()}, {l.moment, a.y()}, {l.moment + 1, a.z()}});
         }
       } else if (c.patch == PatchKind::kSegment) {
         // The centre of pressure -M / N within [lo, hi].
@@ -426,16 +434,15 @@ class Assembly {
       for (const auto& entry : row) sum += entry.second * entry.second;
       return std::sqrt(sum);
     };
-    bool violated = false;
-    for (const Inequality& row : g) violated = violated || value(row, lambda) < 0.0;
-    if (!violated) return false;
     // GLPK is given finite numbers only (it stops the process on some invalid input).
-    for (const Inequality& row : g) {
-      for (const auto& entry : row) {
-        if (!std::isfinite(entry.second)) return false;
-      }
-    }
     if (!lambda.allFinite()) return false;
+    bool violated = false;
+    for (const Inequality& row : g) {
+      const double v = value(row, lambda);
+      if (!std::isfinite(v)) return false;
+      violated = violated || v < 0.0;
+    }
+    if (!violated) return false;
     // The null space of the wrench map: lambda -> the net wrench on each body.
     const Eigen::Index nb = static_cast<Eigen::Index>(bodies_.size());
     MatX B = MatX::Zero(6 * nb, m);
@@ -488,8 +495,7 @@ class Assembly {
     parameters.msg_lev = GLP_MSG_OFF;
     const int code = glp_simplex(lp, &parameters);
     bool changed = false;
-    if (code == 0 && glp_get_status(lp) == GLP_OPT &&
-        glp_get_obj_val(lp) >= -1e-9 * scale) {
+    if (code == 0 && glp_get_status(lp) == GLP_OPT && glp_get_obj_val(lp) >= -1e-9 * scale) {
       VecX y(k);
       for (Eigen::Index c = 0; c < k; ++c) y(c) = glp_get_col_prim(lp, static_cast<int>(c) + 1);
       const VecX moved = lambda + Z * y;
@@ -722,17 +728,14 @@ HeldViolation worst_violation(const std::vector<HeldContact>& contacts, const He
     const int ci = static_cast<int>(i);
     const double N = std::max(f.normal, 0.0);
     if (c.patch == PatchKind::kPolygon) {
-      // N (d - p0) . inward >= 0, with N d = (-M2, M1).
-      const Vec2 Nd(-f.moment.y(), f.moment.x());
       const std::size_t n = c.polygon.size();
+      Vec3 a;
       for (std::size_t e = 0; e < n; ++e) {
+        if (!polygon_edge_inequality(c, e, a)) continue;
         const Vec2& p0 = c.polygon[e];
-        const Vec2& p1 = c.polygon[(e + 1) % n];
-        const Vec2 edge = p1 - p0;
-        const Vec2 inward = Vec2(-edge.y(), edge.x()) / edge.norm();
-        const double size = (p1 - p0).norm() + p0.norm();
+        const double size = (c.polygon[(e + 1) % n] - p0).norm() + p0.norm();
         consider(HeldViolation::Kind::kTip, ci, static_cast<int>(e),
-                 -inward.dot(Nd - N * p0) / (size > 0.0 ? size : 1.0));
+                 -a.dot(Vec3(N, f.moment.x(), f.moment.y())) / size);
       }
     } else if (c.patch == PatchKind::kSegment) {
       // The centre of pressure along s: -M_m / N, within [lo, hi].
@@ -762,7 +765,8 @@ namespace {
 // acceleration below -tolerance times the scale), or -1; none of `returned` (brought back once
 // already).
 int closing_released(const std::vector<HeldContact>& contacts, const HeldModes& modes,
-                     double acceleration_scale, double tolerance, const std::vector<int>& returned) {
+                     double acceleration_scale, double tolerance,
+                     const std::vector<int>& returned) {
   int closing = -1;
   double fastest = -tolerance * acceleration_scale;
   for (int i : modes.released) {
@@ -805,9 +809,15 @@ HeldModes choose_held_modes(const std::vector<HeldBody>& bodies, std::vector<Hel
   if (!(acceleration_scale > 0.0)) acceleration_scale = 1.0;
   std::vector<int> returned;  // contacts brought back, once each (no cycling between two sets)
   for (;;) {
-    out.solution = solve_held(bodies, contacts, /*feasible_forces=*/true);
+    out.solution = solve_held(bodies, contacts);
     if (out.solution.status != HeldStatus::kOk) return out;
-    const HeldViolation v = worst_violation(contacts, out.solution, tolerance);
+    HeldViolation v = worst_violation(contacts, out.solution, tolerance);
+    if (v.kind != HeldViolation::Kind::kNone) {
+      // The least-norm forces break a condition; forces that break none may exist all the same
+      // (a redundant island: a box on two, boxes side by side). Only their failing changes a mode.
+      out.solution = solve_held(bodies, contacts, /*feasible_forces=*/true);
+      v = worst_violation(contacts, out.solution, tolerance);
+    }
     if (v.kind == HeldViolation::Kind::kNone) {
       // A contact let go earlier must not close now: the friction or the pressure that made it
       // pull may since have changed mode. The one closing fastest comes back (an active set).

@@ -80,9 +80,10 @@ struct Simulation::Impl {
   // was just stopped along its contact, and what touches it now meets it (hold()).
   const Vec3* held_acceleration(BodyId id) const {
     static const Vec3 kStill = Vec3::Zero();
-    if (const Island* is = island(id); is && is->plan_pending) return &kStill;
-    const Island* is = planned_island(id);
-    return is ? &is->acceleration(static_cast<std::size_t>(is->index_of(id))) : nullptr;
+    const Island* is = island(id);
+    if (!is) return nullptr;
+    if (is->plan_pending) return &kStill;
+    return &is->acceleration(static_cast<std::size_t>(is->index_of(id)));
   }
   ContactSide side(BodyId id, const BodyState& s) const {
     return ContactSide{id, body(id), pairs.geometry(id), s, held_acceleration(id)};

@@ -328,8 +328,8 @@ void pyramid(int rows, std::vector<HeldBody>& bodies, std::vector<HeldContact>& 
     const int k = rows - r;
     for (int j = 0; j < k; ++j) {
       index[static_cast<std::size_t>(r)].push_back(static_cast<int>(bodies.size()));
-      bodies.push_back(box(1.0, Vec3(h / 2, h / 2, h / 2),
-                           Vec3((j - (k - 1) / 2.0) * h, 0, h / 2 + r * h)));
+      bodies.push_back(
+          box(1.0, Vec3(h / 2, h / 2, h / 2), Vec3((j - (k - 1) / 2.0) * h, 0, h / 2 + r * h)));
     }
   }
   auto x_of = [&](int i) { return bodies[static_cast<std::size_t>(i)].x_W; };
@@ -343,9 +343,11 @@ void pyramid(int rows, std::vector<HeldBody>& bodies, std::vector<HeldContact>& 
         contacts.push_back(k);
       } else {
         // On the two below, over the half of each it covers.
-        for (int s : {row[j] - static_cast<int>(row.size()) - 1, row[j] - static_cast<int>(row.size())}) {
+        for (int s :
+             {row[j] - static_cast<int>(row.size()) - 1, row[j] - static_cast<int>(row.size())}) {
           const Vec3 below = x_of(s);
-          contacts.push_back(between_boxes(row[j], s, Vec3(0.5 * (x.x() + below.x()), 0, x.z() - h / 2),
+          contacts.push_back(between_boxes(row[j], s,
+                                           Vec3(0.5 * (x.x() + below.x()), 0, x.z() - h / 2),
                                            Vec3::UnitZ(), Vec3::UnitX(), h / 4, h / 2, mu));
         }
       }
