@@ -93,8 +93,8 @@ int apgd_scaled(const MatX& A, const VecX& b, double lipschitz, VecX& l, Project
 // form, while the scaled operator D A D is far better conditioned where masses and lever arms
 // differ by orders of magnitude. `project_scaled(m, d)` projects in the scaled variables.
 template <class Project>
-int apgd(const MatX& A, const VecX& b, VecX& l, Project project_scaled,
-         const GroupOptions& options, bool& converged) {
+int apgd(const MatX& A, const VecX& b, VecX& l, Project project_scaled, const GroupOptions& options,
+         bool& converged) {
   const int k = static_cast<int>(b.size() / 3);
   VecX d(3 * k);
   for (int i = 0; i < k; ++i) {
@@ -113,57 +113,185 @@ int apgd(const MatX& A, const VecX& b, VecX& l, Project project_scaled,
   return iterations;
 }
 
-// The frictionless plastic LCP on the normals: l_n >= 0, u_n = (A l + b)_n >= 0, l_n u_n = 0,
-// by enumerating active sets, smallest first (the velocities are unique; A may be singular).
+// min x.H.x / 2 + c.x over x >= 0 for a symmetric positive definite H: Lawson & Hanson's active
+// set ("Solving least squares problems", 1974, ch. 23), written for a quadratic form rather than
+// a least-squares matrix. Finite in exact arithmetic: each outer step frees the bound with the
+// steepest descent, each inner step moves to the free set's minimiser or to the first bound on the
+// way. Returns false if it hit the iteration cap (x is then feasible, not optimal).
+bool nonnegative_qp(const MatX& H, const VecX& c, double tolerance, VecX& x) {
+  const int k = static_cast<int>(c.size());
+  x = VecX::Zero(k);
+  std::vector<char> free(k, 0);
+  const int cap = 10 * k + 100;
+  int it = 0;
+  while (it++ < cap) {
+    const VecX w = -(H * x + c);  // > 0: descent by raising x_i from its bound
+    int j = -1;
+    for (int i = 0; i < k; ++i) {
+      if (!free[i] && w[i] > tolerance && (j < 0 || w[i] > w[j])) j = i;
+    }
+    if (j < 0) return true;
+    free[j] = 1;
+    while (it++ < cap) {
+      std::vector<int> set;
+      for (int i = 0; i < k; ++i) {
+        if (free[i]) set.push_back(i);
+      }
+      const int m = static_cast<int>(set.size());
+      MatX Hs(m, m);
+      VecX cs(m);
+      for (int a = 0; a < m; ++a) {
+        cs[a] = c[set[a]];
+        for (int b = 0; b < m; ++b) Hs(a, b) = H(set[a], set[b]);
+      }
+      const VecX z = Hs.ldlt().solve(-cs);
+      // The longest step towards z that keeps every free variable >= 0, and what stops it.
+      double alpha = 1.0;
+      int stop = -1;
+      for (int a = 0; a < m; ++a) {
+        if (z[a] > 0.0) continue;
+        const double x_a = x[set[a]];
+        const double to_bound = x_a > 0.0 ? x_a / (x_a - z[a]) : 0.0;
+        if (to_bound < alpha || stop < 0) {
+          alpha = std::min(alpha, to_bound);
+          stop = a;
+        }
+      }
+      if (stop < 0) {
+        for (int a = 0; a < m; ++a) x[set[a]] = z[a];
+        break;
+      }
+      // Exactly, the variable just freed rises (Lawson & Hanson, lemma 23.17); if rounding says
+      // otherwise at once, x is optimal to rounding.
+      if (alpha <= 0.0 && set[stop] == j) {
+        free[j] = 0;
+        return true;
+      }
+      for (int a = 0; a < m; ++a) x[set[a]] += alpha * (z[a] - x[set[a]]);
+      x[set[stop]] = 0.0;
+      for (int a = 0; a < m; ++a) {
+        if (x[set[a]] <= 0.0) {
+          x[set[a]] = 0.0;
+          free[set[a]] = 0;
+        }
+      }
+    }
+  }
+  return false;
+}
+
+// The frictionless plastic LCP on the normals: l_n >= 0, u_n = (A l + b)_n >= 0, l_n u_n = 0, as
+// the convex programme min l.A.l / 2 + b.l over l_n >= 0 (A is positive semidefinite). A may be
+// singular (seven contacts on one body, of six freedoms): the impulses are then not unique, the
+// velocities are. Solved by proximal point: each round the strictly convex problem with
+// delta |l - l_last|^2 / 2 added (delta 1e-12 of A's largest diagonal), by the active set above;
+// the rounds converge to a solution of the LCP whenever one exists (Rockafellar 1976), and each
+// leaves u_n short of complementarity by at most delta |l - l_last|. Any number of contacts.
 // Returns false (l untouched) if nothing approaches by more than `slack`.
 bool normal_lcp(const MatX& A, const VecX& b, double slack, VecX& l) {
   const int k = static_cast<int>(b.size() / 3);
-  std::vector<int> approaching;
-  for (int i = 0; i < k; ++i) {
-    if (b[3 * i + 2] < -slack) approaching.push_back(i);
-  }
-  if (approaching.empty()) return false;
+  bool approaching = false;
+  for (int i = 0; i < k; ++i) approaching = approaching || b[3 * i + 2] < -slack;
+  if (!approaching) return false;
   MatX An(k, k);
   VecX bn(k);
   for (int i = 0; i < k; ++i) {
     bn[i] = b[3 * i + 2];
     for (int j = 0; j < k; ++j) An(i, j) = A(3 * i + 2, 3 * j + 2);
   }
-  const double scale = std::max(bn.cwiseAbs().maxCoeff(), 1e-300);
-  VecX best = VecX::Zero(k);
-  double best_violation = kInfinity;
-  const int subsets = k <= 16 ? (1 << k) : 0;
-  for (int size = 1; size <= k && best_violation > 0.0; ++size) {
-    for (int mask = 1; mask < subsets; ++mask) {
-      if (__builtin_popcount(static_cast<unsigned>(mask)) != size) continue;
-      std::vector<int> act;
-      for (int i = 0; i < k; ++i) {
-        if (mask & (1 << i)) act.push_back(i);
-      }
-      const int m = static_cast<int>(act.size());
-      MatX Aa(m, m);
-      VecX ba(m);
-      for (int x = 0; x < m; ++x) {
-        ba[x] = bn[act[x]];
-        for (int y = 0; y < m; ++y) Aa(x, y) = An(act[x], act[y]);
-      }
-      const VecX la = Aa.completeOrthogonalDecomposition().solve(-ba);
-      VecX ln = VecX::Zero(k);
-      for (int x = 0; x < m; ++x) ln[act[x]] = la[x];
-      const VecX u = An * ln + bn;
-      const double violation = std::max({0.0, -ln.minCoeff() * 1e-3, -u.minCoeff() / scale});
-      if (violation < best_violation) {
-        best_violation = violation;
-        best = ln;
-      }
-      if (violation <= 1e-12) {
-        best_violation = 0.0;
-        break;
-      }
-    }
+  const double diag = std::max(An.diagonal().maxCoeff(), 1e-300);
+  const double delta = 1e-12 * diag;
+  const MatX H = An + delta * MatX::Identity(k, k);
+  VecX x = VecX::Zero(k), next(k);
+  for (int round = 0; round < 50; ++round) {
+    nonnegative_qp(H, bn - delta * x, 1e-15 * std::max(bn.cwiseAbs().maxCoeff(), slack), next);
+    const double moved = (next - x).lpNorm<Eigen::Infinity>();
+    x = next;
+    // The round's proximal term shifts u_n by at most delta * moved: stop once that is rounding.
+    if (delta * moved <= 1e-15 * std::max(bn.cwiseAbs().maxCoeff(), slack)) break;
   }
-  for (int i = 0; i < k; ++i) l[3 * i + 2] += std::max(best[i], 0.0);
+  for (int i = 0; i < k; ++i) l[3 * i + 2] += std::max(x[i], 0.0);
   return true;
+}
+
+// Stronge's law for a group's expansion: normal impulses p >= 0 such that each contact's normal
+// impulse, applied along the straight path from the end of compression, does the work
+// W_i(p) = p_i (start_i + end_i(p)) / 2 = target_i, where start is the normal velocity at the end
+// of compression and end(p) = base + A_nn p the one at the end of expansion (base: the friction's
+// share, held). Newton's method from `guess` (Poisson's answer), halving a step that would make an
+// impulse negative or not reduce the residual. A contact with no target gets no impulse.
+VecX stronge_normals(const MatX& A, const VecX& u_start, const VecX& u_base, const VecX& target,
+                     const VecX& guess) {
+  const int k = static_cast<int>(target.size());
+  MatX Ann(k, k);
+  VecX start(k), base(k);
+  for (int i = 0; i < k; ++i) {
+    start[i] = u_start[3 * i + 2];
+    base[i] = u_base[3 * i + 2];
+    for (int j = 0; j < k; ++j) Ann(i, j) = A(3 * i + 2, 3 * j + 2);
+  }
+  std::vector<char> on(k);
+  for (int i = 0; i < k; ++i) on[i] = target[i] > 0.0;
+  auto residual = [&](const VecX& p) {
+    VecX F = VecX::Zero(k);
+    const VecX end = base + Ann * p;
+    for (int i = 0; i < k; ++i) {
+      if (on[i]) F[i] = 0.5 * p[i] * (start[i] + end[i]) - target[i];
+    }
+    return F;
+  };
+  // Each contact's work, the others' impulses held, is a parabola in its own impulse through 0
+  // with a single nonnegative root: A_ii p^2 + B p - 2 target = 0, B = start + base + the
+  // others' share. Jacobi rounds on those roots (all contacts at once: a mirror-symmetric group
+  // stays symmetric), half-damped, bring p onto the branch where every contact separates; Newton's
+  // method then polishes (from Poisson's guess it could converge to p_i = 0 on the wrong branch,
+  // a contact driven into approach by the others' expansion).
+  VecX p = guess;
+  for (int i = 0; i < k; ++i) {
+    if (!on[i]) p[i] = 0.0;
+  }
+  for (int round = 0; round < 200; ++round) {
+    const VecX share = Ann * p;
+    VecX next = p;
+    for (int i = 0; i < k; ++i) {
+      if (!on[i]) continue;
+      const double a = Ann(i, i);
+      const double B = start[i] + base[i] + share[i] - a * p[i];
+      // The root, without cancellation: 4 target / (B + sqrt(...)) when B > 0.
+      const double sq = std::sqrt(B * B + 8.0 * a * target[i]);
+      next[i] = B > 0.0 ? 4.0 * target[i] / (B + sq) : a > 0.0 ? (sq - B) / (2.0 * a) : 0.0;
+    }
+    const double change = (next - p).lpNorm<Eigen::Infinity>();
+    p = 0.5 * (p + next);
+    if (change <= 1e-12 * std::max(p.lpNorm<Eigen::Infinity>(), 1e-300)) break;
+  }
+  VecX F = residual(p);
+  const double scale = std::max(target.lpNorm<Eigen::Infinity>(), 1e-300);
+  for (int it = 0; it < 100 && F.lpNorm<Eigen::Infinity>() > 1e-15 * scale; ++it) {
+    const VecX end = base + Ann * p;
+    MatX Jac = MatX::Identity(k, k);
+    for (int i = 0; i < k; ++i) {
+      if (!on[i]) continue;
+      Jac.row(i) = 0.5 * p[i] * Ann.row(i);
+      Jac(i, i) += 0.5 * (start[i] + end[i]);
+    }
+    VecX step = -Jac.colPivHouseholderQr().solve(F);
+    for (int i = 0; i < k; ++i) {
+      if (!on[i]) step[i] = 0.0;
+    }
+    double t = 1.0;
+    VecX trial = p + step;
+    VecX F_trial = residual(trial);
+    while (t > 1e-6 && (trial.minCoeff() < 0.0 || F_trial.norm() >= F.norm())) {
+      t *= 0.5;
+      trial = p + t * step;
+      F_trial = residual(trial);
+    }
+    if (t <= 1e-6) break;  // no progress: keep the last iterate
+    p = trial;
+    F = F_trial;
+  }
+  return p;
 }
 
 double kinetic(const std::vector<GroupBody>& bodies, const VecX& q) {
@@ -262,7 +390,7 @@ GroupResult resolve_group(const std::vector<GroupBody>& bodies,
   }
   VecX q_c = q + MinvJt * l_c;
 
-  // 2. Expansion (Poisson): the normal impulses e lambda_c,n; friction within their disks.
+  // 2. Expansion: the normal impulses the law asks; friction within their disks.
   VecX l_e = VecX::Zero(3 * k);
   bool any_restitution = false;
   for (int i = 0; i < k; ++i) {
@@ -271,13 +399,42 @@ GroupResult resolve_group(const std::vector<GroupBody>& bodies,
   }
   VecX q_e = q_c;
   if (any_restitution) {
+    // Poisson: p_e,n = e p_c,n. Stronge: p_e,n such that each contact's normal force does
+    // e^2 times the work it absorbed in compression (see stronge_normals).
+    VecX pn(k);
+    for (int i = 0; i < k; ++i) pn[i] = l_e[3 * i + 2];
     auto disks = [&](VecX& l, const VecX& d) {
       for (int i = 0; i < k; ++i) {
-        const double pn = contacts[i].restitution * l_c[3 * i + 2] / d[3 * i];
-        project_disk(l, i, contacts[i].friction * pn, pn);
+        const double n = pn[i] / d[3 * i];
+        project_disk(l, i, contacts[i].friction * n, n);
       }
     };
-    out.iterations += apgd(A, J * q_c, l_e, disks, options, out.converged);
+    const VecX u_c = J * q_c;
+    out.iterations += apgd(A, u_c, l_e, disks, options, out.converged);
+    if (options.law == RestitutionLaw::kStronge) {
+      const VecX u0n = J * q;
+      VecX target(k);
+      for (int i = 0; i < k; ++i) {
+        // Along the straight impulse path 0 -> l_c the normal velocity is linear in the path
+        // parameter: the work is the impulse times the mean of the end velocities.
+        const double w_c = 0.5 * l_c[3 * i + 2] * (u0n[3 * i + 2] + u_c[3 * i + 2]);
+        const double e = contacts[i].restitution;
+        target[i] = e * e * std::max(-w_c, 0.0);
+      }
+      for (int round = 0; round < options.max_stronge_rounds; ++round) {
+        // The friction impulses held, the normal impulses that meet the targets.
+        VecX tangential = l_e;
+        for (int i = 0; i < k; ++i) tangential[3 * i + 2] = 0.0;
+        const VecX end_without_normals = u_c + A * tangential;
+        const VecX next = stronge_normals(A, u_c, end_without_normals, target, pn);
+        const double change = (next - pn).lpNorm<Eigen::Infinity>();
+        pn = next;
+        for (int i = 0; i < k; ++i) l_e[3 * i + 2] = pn[i];
+        out.iterations += apgd(A, u_c, l_e, disks, options, out.converged);
+        ++out.stronge_rounds;
+        if (change <= 1e-13 * std::max(pn.lpNorm<Eigen::Infinity>(), 1e-300)) break;
+      }
+    }
     // The energy bound: KE(s) = KE_c + s l_e.J q_c + s^2 l_e.A.l_e / 2 <= KE_before.
     const double ke_c = kinetic(bodies, q_c);
     const double lin = l_e.dot(J * q_c), quad = 0.5 * l_e.dot(A * l_e);

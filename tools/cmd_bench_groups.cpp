@@ -42,7 +42,10 @@ struct Worst {
   nlohmann::json json() const { return {{"value", value}, {"group", group}}; }
 };
 
-int run_groups(std::int64_t first, std::int64_t count, std::uint64_t seed) {
+int run_groups(std::int64_t first, std::int64_t count, std::uint64_t seed,
+               palpable::RestitutionLaw law) {
+  palpable::GroupOptions options;
+  options.law = law;
   palpable::tools::RandomGroups groups(seed);
   for (std::int64_t i = 0; i < first; ++i) groups.next();  // drawn, not resolved
   const palpable::tools::GroupBounds bounds;
@@ -52,7 +55,7 @@ int run_groups(std::int64_t first, std::int64_t count, std::uint64_t seed) {
   const auto start = std::chrono::steady_clock::now();
   for (std::int64_t i = first; i < first + count; ++i) {
     const RandomGroup g = groups.next();
-    const GroupResult r = palpable::resolve_group(g.bodies, g.contacts);
+    const GroupResult r = palpable::resolve_group(g.bodies, g.contacts, options);
     const GroupFigures f = palpable::tools::group_figures(g, r);
     contacts += static_cast<std::int64_t>(g.contacts.size());
     unconverged += r.converged ? 0 : 1;
@@ -73,6 +76,7 @@ int run_groups(std::int64_t first, std::int64_t count, std::uint64_t seed) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   nlohmann::json line{{"bench", "groups"},
                       {"seed", seed},
+                      {"law", std::string(palpable::to_string(law))},
                       {"first", first},
                       {"count", count},
                       {"contacts", contacts},
@@ -184,7 +188,8 @@ palpable::tools::CommandRegistration groups_registration{
           "the bounds (energy created, an impulse outside its cone, a contact left approaching, "
           "momentum), the worst of each figure and the group that reached it. Exit 1 if any "
           "group breaks a bound.\n\nExample:\n  palpable bench groups --count 100000 --seed "
-          "20261124\n  palpable bench groups --first 50000 --count 50000   (its second half)");
+          "20261124\n  palpable bench groups --first 50000 --count 50000   (its second half)\n  "
+          "palpable bench groups --law stronge   (Stronge's energetic law per contact)");
       auto count = std::make_shared<std::int64_t>(100000);
       auto seed = std::make_shared<std::uint64_t>(20261124);
       auto first = std::make_shared<std::int64_t>(0);
@@ -195,8 +200,15 @@ palpable::tools::CommandRegistration groups_registration{
                      "so that a long run can be split over processes; default 0")
           ->check(CLI::Range(std::int64_t{0}, std::int64_t{1} << 40));
       app.add_option("--seed", *seed, "seed of the stream (default 20261124, the suite's)");
-      return std::function<int()>(
-          [first, count, seed] { return run_groups(*first, *count, *seed); });
+      auto law = std::make_shared<std::string>("poisson");
+      app.add_option("--law", *law,
+                     "restitution law of the expansion: \"poisson\" (default) or \"stronge\"")
+          ->check(CLI::IsMember({"poisson", "stronge"}));
+      return std::function<int()>([first, count, seed, law] {
+        return run_groups(*first, *count, *seed,
+                          *law == "stronge" ? palpable::RestitutionLaw::kStronge
+                                            : palpable::RestitutionLaw::kPoisson);
+      });
     }};
 
 palpable::tools::CommandRegistration cost_registration{

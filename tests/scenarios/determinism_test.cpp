@@ -56,15 +56,15 @@ struct Expected {
 // The committed final-state hashes of the shipped scenes.
 const Expected kExpected[] = {
     {"ball_on_platter.json", 0xa16074210345a65bull},
-    {"balls_in_dish.json", 0xf15783b2637bf2baull},
+    {"balls_in_dish.json", 0x3659d0c37e8aec99ull},
     {"block_on_ramp_accelerating.json", 0x6b95d2cc13eadd0aull},
     {"block_on_ramp_decelerating.json", 0xa6bcfd47994a1366ull},
     {"bowling.json", 0x0ac28b1558ff64ecull},
-    {"chain_of_balls.json", 0x77e5ac8fe4550a70ull},
+    {"chain_of_balls.json", 0x388a47e821747d2full},
     {"coins.json", 0x882f15f6c0fdb34bull},
     {"cylinder_rolling_slope.json", 0xdcd448b0967314f3ull},
     {"eulers_disk.json", 0x4661aa5e1f938a27ull},
-    {"pool_break.json", 0x412f2ba6c63bad8aull},
+    {"pool_break.json", 0x7f5daab306ee6c53ull},
     {"rattleback.json", 0x62b720820bc2ac9full},
     {"rolling_coin.json", 0x953d42cf719519d2ull},
     {"sphere_slide_to_roll.json", 0x8d0cc90c21d15ce4ull},
