@@ -133,7 +133,12 @@ std::optional<CollisionRecord> Simulation::Impl::collide_group(std::uint32_t ind
     g.w_W = s.w_W;
     bodies.push_back(g);
   }
-  const GroupResult r = resolve_group(bodies, contacts);
+  GroupOptions options;
+  // The scene's law. Newton's kinematic law is not offered to groups (it can create energy at a
+  // lone contact already): a group under it is resolved by Poisson's.
+  options.law = settings().restitution_law == RestitutionLaw::kStronge ? RestitutionLaw::kStronge
+                                                                       : RestitutionLaw::kPoisson;
+  const GroupResult r = resolve_group(bodies, contacts, options);
   std::vector<double> kinetic_before;
   for (BodyId id : ids) {
     commit(id, t);

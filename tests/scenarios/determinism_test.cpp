@@ -56,7 +56,7 @@ struct Expected {
 // The committed final-state hashes of the shipped scenes.
 const Expected kExpected[] = {
     {"ball_on_platter.json", 0xa16074210345a65bull},
-    {"balls_in_dish.json", 0x3659d0c37e8aec99ull},
+    {"balls_in_dish.json", 0x07b60074c2e532d3ull},
     {"block_on_ramp_accelerating.json", 0x6b95d2cc13eadd0aull},
     {"block_on_ramp_decelerating.json", 0xa6bcfd47994a1366ull},
     {"bowling.json", 0x0ac28b1558ff64ecull},
@@ -64,7 +64,7 @@ const Expected kExpected[] = {
     {"coins.json", 0x882f15f6c0fdb34bull},
     {"cylinder_rolling_slope.json", 0xdcd448b0967314f3ull},
     {"eulers_disk.json", 0x4661aa5e1f938a27ull},
-    {"pool_break.json", 0x7f5daab306ee6c53ull},
+    {"pool_break.json", 0xcb96aa4665554078ull},
     {"rattleback.json", 0x62b720820bc2ac9full},
     {"rolling_coin.json", 0x953d42cf719519d2ull},
     {"sphere_slide_to_roll.json", 0x8d0cc90c21d15ce4ull},
