@@ -1,8 +1,8 @@
 // Simultaneous contact under the default settings (issue 15): symmetric problems keep their
 // symmetry through impacts and through the microcollision trains that follow, because contacts
 // that meet at one instant are resolved as one group.
-#include "scenarios/scene.hpp"
 #include "impulse/microcollision.hpp"
+#include "scenarios/scene.hpp"
 #include "scheduler/simulation.hpp"
 
 #include <catch2/catch.hpp>
@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <vector>
 
 using namespace palpable;
 
@@ -20,13 +21,12 @@ constexpr double kPi = 3.14159265358979323846;
 
 // A 1 s scene of `bodies` under gravity, one material (mu, e) for every pair.
 Scene make_scene(const nlohmann::json& bodies, double mu, double e) {
-  const nlohmann::json doc = {
-      {"format", "palpable-scene/1"},
-      {"name", "simultaneous"},
-      {"gravity", {0, 0, -9.81}},
-      {"end_time", 1.0},
-      {"materials", {{"default", {{"friction", mu}, {"restitution", e}}}}},
-      {"bodies", bodies}};
+  const nlohmann::json doc = {{"format", "palpable-scene/1"},
+                              {"name", "simultaneous"},
+                              {"gravity", {0, 0, -9.81}},
+                              {"end_time", 1.0},
+                              {"materials", {{"default", {{"friction", mu}, {"restitution", e}}}}},
+                              {"bodies", bodies}};
   return scene_from_json(doc, "simultaneous.json");
 }
 
@@ -143,9 +143,9 @@ TEST_CASE("a cube dropped flat onto a resting cube turns neither and drifts neit
     nlohmann::json orientation;
     double x, y;
   };
-  for (const Variant& v : {Variant{"aligned", {1, 0, 0, 0}, 0.0, 0.0},
-                           Variant{"turned", {c8, 0, 0, s8}, 0.0, 0.0},
-                           Variant{"off centre", {1, 0, 0, 0}, 0.02, 0.01}}) {
+  for (const Variant& v :
+       {Variant{"aligned", {1, 0, 0, 0}, 0.0, 0.0}, Variant{"turned", {c8, 0, 0, s8}, 0.0, 0.0},
+        Variant{"off centre", {1, 0, 0, 0}, 0.02, 0.01}}) {
     for (double e : {0.0, 0.5}) {
       CAPTURE(v.name, e);
       const nlohmann::json box = {{"type", "box"}, {"half_extents", {half, half, half}}};
@@ -194,6 +194,101 @@ TEST_CASE("a cube dropped flat onto a resting cube turns neither and drifts neit
         ++impulses;
       }
       CHECK(impulses >= 3);
+    }
+  }
+}
+
+namespace {
+
+// Five equal balls in a row along x without gravity; the first `strikers` move at `v` towards
+// the rest, every neighbouring pair `gap` apart. Returns the balls' x velocities after 1 s.
+std::vector<double> cradle(int strikers, double gap, double e, double v) {
+  const double radius = 0.05;
+  nlohmann::json bodies = nlohmann::json::array();
+  for (int i = 0; i < 5; ++i) {
+    // The strikers start 0.1 m short of the row, keeping their own gaps.
+    const double x = i * (2 * radius + gap) - (i < strikers ? 0.1 : 0.0);
+    bodies.push_back({{"name", "ball" + std::to_string(i)},
+                      {"mass", 0.2},
+                      {"shape", {{"type", "sphere"}, {"radius", radius}}},
+                      {"position", {x, 0, 0}},
+                      {"velocity", {i < strikers ? v : 0.0, 0, 0}}});
+  }
+  const nlohmann::json doc = {{"format", "palpable-scene/1"},
+                              {"name", "cradle"},
+                              {"gravity", {0, 0, 0}},
+                              {"end_time", 1.0},
+                              {"materials", {{"default", {{"friction", 0.3}, {"restitution", e}}}}},
+                              {"bodies", bodies}};
+  const Scene scene = scene_from_json(doc, "cradle.json");
+  Simulation sim(scene.world, SimulationOptions{});
+  sim.run_until(1.0, nullptr);
+  std::vector<double> out;
+  for (std::uint32_t i = 0; i < 5; ++i) out.push_back(sim.state_at(BodyId{i}, 1.0).v_W.x());
+  return out;
+}
+
+// The oracle for balls apart: a 1-D event-driven run of the same row, two-body impacts in time
+// order, each by the head-on formula for equal masses.
+std::vector<double> cradle_1d(int strikers, double gap, double e, double v) {
+  std::vector<double> x(5), u(5);
+  for (int i = 0; i < 5; ++i) {
+    x[i] = i * gap - (i < strikers ? 0.1 : 0.0);  // gaps between surfaces: radii removed
+    u[i] = i < strikers ? v : 0.0;
+  }
+  for (int n = 0; n < 100; ++n) {
+    int first = -1;
+    double dt = 1e300;
+    for (int i = 0; i + 1 < 5; ++i) {
+      const double closing = u[i] - u[i + 1];
+      if (closing > 0 && (x[i + 1] - x[i]) / closing < dt) {
+        dt = (x[i + 1] - x[i]) / closing;
+        first = i;
+      }
+    }
+    if (first < 0) break;
+    for (int i = 0; i < 5; ++i) x[i] += u[i] * dt;
+    const double a = u[first], b = u[first + 1];
+    u[first] = 0.5 * (a + b) - 0.5 * e * (a - b);
+    u[first + 1] = 0.5 * (a + b) + 0.5 * e * (a - b);
+  }
+  return u;
+}
+
+}  // namespace
+
+// Issue 15's cradles under the default settings: contacts separated by a gap stay separate
+// events, so balls hanging apart give the textbook (sequential) outcome; touching balls do not
+// approach at the striker's instant, so they stay sequential too, and a cradle's touching row
+// gives the same outcome with momentum and (e = 1) energy kept.
+TEST_CASE("Newton's cradles of five balls give the sequential outcome apart and touching",
+          "[scenarios][group]") {
+  const double v = 1.0;
+  for (int strikers : {1, 2}) {
+    for (double e : {1.0, 0.9}) {
+      for (double gap : {1e-5, 1e-4, 1e-3}) {
+        CAPTURE(strikers, e, gap);
+        const std::vector<double> got = cradle(strikers, gap, e, v);
+        const std::vector<double> want = cradle_1d(strikers, gap, e, v);
+        for (int i = 0; i < 5; ++i) CHECK(got[i] == Approx(want[i]).margin(1e-12));
+        if (e == 1.0) {
+          // The textbook: as many balls leave the far end at v as struck.
+          for (int i = 0; i < 5; ++i)
+            CHECK(got[i] == Approx(i >= 5 - strikers ? v : 0).margin(1e-12));
+        }
+      }
+    }
+    // Touching (gap 0): momentum and, for e = 1, energy to 1e-12; the outcome is the textbook's.
+    const std::vector<double> touching = cradle(strikers, 0.0, 1.0, v);
+    double p = 0, ke = 0;
+    for (double u : touching) {
+      p += 0.2 * u;
+      ke += 0.5 * 0.2 * u * u;
+    }
+    CHECK(p == Approx(0.2 * v * strikers).epsilon(1e-12));
+    CHECK(ke == Approx(0.5 * 0.2 * v * v * strikers).epsilon(1e-12));
+    for (int i = 0; i < 5; ++i) {
+      CHECK(touching[i] == Approx(i >= 5 - strikers ? v : 0).margin(1e-12));
     }
   }
 }
