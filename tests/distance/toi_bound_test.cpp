@@ -357,8 +357,8 @@ TEST_CASE("inside the target gap and receding: back down at the target gap, else
 
 TEST_CASE("the progress floor never carries a pair through contact", "[distance][toi]") {
   // A box face closing on a fixed plane at 1e4 m/s: the 1e-6 s floor alone would move it 1 cm,
-  // a hundred envelopes. The floor is capped by the time the bound allows to close the whole gap
-  // (outside the target gap) or d_target (inside it).
+  // a hundred envelopes. The floor is capped by the time the bound allows to close the whole
+  // present gap, inside the target gap too: no overlap.
   ToiMotion box, ground;
   box.v_W = Vec3(0.0, 0.0, -1e4);
   DistanceResult closest;
@@ -370,11 +370,11 @@ TEST_CASE("the progress floor never carries a pair through contact", "[distance]
   ToiBound bound = toi_bound(box, ground, closest, d_target, settings);
   CHECK(bound.floored);
   CHECK(bound.dt == Approx(1e-3 / 1e4).epsilon(1e-12));
-  closest.distance = 1e-5;  // inside the target gap, approaching: at most d_target deep
+  closest.distance = 1e-5;  // inside the target gap, approaching: up to the plane, not past it
   bound = toi_bound(box, ground, closest, d_target, settings);
   CHECK(bound.floored);
-  CHECK(bound.dt == Approx(d_target / 1e4).epsilon(1e-12));
-  // Slow pairs keep the whole floor: at 1 m/s, 1e-6 s closes 1e-6 m < d_target.
+  CHECK(bound.dt == Approx(1e-5 / 1e4).epsilon(1e-12));
+  // Slow pairs keep the whole floor: at 1 m/s, 1e-6 s closes 1e-6 m < the 1e-5 m gap.
   box.v_W.z() = -1.0;
   bound = toi_bound(box, ground, closest, d_target, settings);
   CHECK(bound.dt == settings.toi_min_progress_s);
