@@ -87,29 +87,40 @@ int apgd_scaled(const MatX& A, const VecX& b, double lipschitz, VecX& l, Project
   return options.max_iterations;
 }
 
-// APGD on the problem scaled per contact: l = D m with D = diag(d_i I3), d_i = 1 / sqrt of the
+// The group's operator scaled per contact: l = D m with D = diag(d_i I3), d_i = 1 / sqrt of the
 // mean diagonal of contact i's block of A. A uniform scale of a contact's block maps its cone (or
 // disk, with its radius and normal scaled alike) onto itself, so the projections are unchanged in
 // form, while the scaled operator D A D is far better conditioned where masses and lever arms
-// differ by orders of magnitude. `project_scaled(m, d)` projects in the scaled variables.
-template <class Project>
-int apgd(const MatX& A, const VecX& b, VecX& l, Project project_scaled, const GroupOptions& options,
-         bool& converged) {
-  const int k = static_cast<int>(b.size() / 3);
-  VecX d(3 * k);
-  for (int i = 0; i < k; ++i) {
-    const double mean = A.block<3, 3>(3 * i, 3 * i).trace() / 3.0;
-    d.segment<3>(3 * i).setConstant(mean > 0.0 ? 1.0 / std::sqrt(mean) : 1.0);
+// differ by orders of magnitude. Built once per group: every cone and disk problem of the group
+// (compression, each round of the sliding shift, expansion) shares A.
+struct ScaledOperator {
+  VecX d;
+  MatX As;
+  double lipschitz = 1.0;  // the largest eigenvalue of D A D: APGD's step is its inverse
+
+  explicit ScaledOperator(const MatX& A) {
+    const int k = static_cast<int>(A.rows() / 3);
+    d.resize(3 * k);
+    for (int i = 0; i < k; ++i) {
+      const double mean = A.block<3, 3>(3 * i, 3 * i).trace() / 3.0;
+      d.segment<3>(3 * i).setConstant(mean > 0.0 ? 1.0 / std::sqrt(mean) : 1.0);
+    }
+    As = d.asDiagonal() * A * d.asDiagonal();
+    lipschitz = std::max(
+        Eigen::SelfAdjointEigenSolver<MatX>(As, Eigen::EigenvaluesOnly).eigenvalues().maxCoeff(),
+        1e-300);
   }
-  const MatX As = d.asDiagonal() * A * d.asDiagonal();
-  const VecX bs = d.cwiseProduct(b);
-  const double lipschitz = std::max(
-      Eigen::SelfAdjointEigenSolver<MatX>(As, Eigen::EigenvaluesOnly).eigenvalues().maxCoeff(),
-      1e-300);
-  VecX m = l.cwiseQuotient(d);
+};
+
+// APGD on the scaled problem; `project_scaled(m, d)` projects in the scaled variables.
+template <class Project>
+int apgd(const ScaledOperator& op, const VecX& b, VecX& l, Project project_scaled,
+         const GroupOptions& options, bool& converged) {
+  const VecX bs = op.d.cwiseProduct(b);
+  VecX m = l.cwiseQuotient(op.d);
   const int iterations = apgd_scaled(
-      As, bs, lipschitz, m, [&](VecX& x) { project_scaled(x, d); }, options, converged);
-  l = d.cwiseProduct(m);
+      op.As, bs, op.lipschitz, m, [&](VecX& x) { project_scaled(x, op.d); }, options, converged);
+  l = op.d.cwiseProduct(m);
   return iterations;
 }
 
@@ -355,10 +366,12 @@ GroupResult resolve_group(const std::vector<GroupBody>& bodies,
     for (int i = 0; i < k; ++i) project_cone(l, i, contacts[i].friction);
   };
 
+  const ScaledOperator op(A);
+
   // 1. Compression.
   const VecX u0 = J * q;
   VecX l_c = VecX::Zero(3 * k);
-  out.iterations += apgd(A, u0, l_c, cones, options, out.converged);
+  out.iterations += apgd(op, u0, l_c, cones, options, out.converged);
   // The cone problem's conditions leave a sliding contact separating at mu |u_t| (Anitescu's
   // relaxation): a ball sliding on the cloth would leave it. Coulomb's law wants u_n = 0 there.
   // Fixed point on the shift s_i = mu_i |u_t,i|: the cone problem with b_n + s_i leaves
@@ -380,7 +393,7 @@ GroupResult resolve_group(const std::vector<GroupBody>& bodies,
       shift = next;
       VecX l_try = l_c;
       bool ok = true;
-      const int used = apgd(A, u0 + shift, l_try, cones, options, ok);
+      const int used = apgd(op, u0 + shift, l_try, cones, options, ok);
       out.iterations += used;
       if (kinetic(bodies, q + MinvJt * l_try) > ke0) break;
       out.shift_rounds = round + 1;
@@ -410,7 +423,7 @@ GroupResult resolve_group(const std::vector<GroupBody>& bodies,
       }
     };
     const VecX u_c = J * q_c;
-    out.iterations += apgd(A, u_c, l_e, disks, options, out.converged);
+    out.iterations += apgd(op, u_c, l_e, disks, options, out.converged);
     if (options.law == RestitutionLaw::kStronge) {
       const VecX u0n = J * q;
       VecX target(k);
@@ -430,7 +443,7 @@ GroupResult resolve_group(const std::vector<GroupBody>& bodies,
         const double change = (next - pn).lpNorm<Eigen::Infinity>();
         pn = next;
         for (int i = 0; i < k; ++i) l_e[3 * i + 2] = pn[i];
-        out.iterations += apgd(A, u_c, l_e, disks, options, out.converged);
+        out.iterations += apgd(op, u_c, l_e, disks, options, out.converged);
         ++out.stronge_rounds;
         if (change <= 1e-13 * std::max(pn.lpNorm<Eigen::Infinity>(), 1e-300)) break;
       }
