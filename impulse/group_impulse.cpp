@@ -377,11 +377,14 @@ GroupResult resolve_group(const std::vector<GroupBody>& bodies,
   // Fixed point on the shift s_i = mu_i |u_t,i|: the cone problem with b_n + s_i leaves
   // u_n + s_i >= mu_i |u_t,i| = s_i, so u_n >= 0, complementary to lambda_n (De Saxce's
   // bipotential). Each round starts from the last impulse; a round that would gain energy is not
-  // taken (the relaxed answer never gains).
+  // taken (the relaxed answer never gains). The plain iteration contracts linearly (by about 1/2
+  // a round in piles of balls: 30-40 rounds to 1e-12), so each round is extrapolated by
+  // Anderson's method of depth 1 (the secant step on the residual G(s) - s; Walker & Ni 2011),
+  // the shift kept >= 0; an extrapolated round that would gain energy is taken plainly instead.
   {
     double speed = 0.0;
     for (int i = 0; i < k; ++i) speed = std::max(speed, u0.segment<3>(3 * i).norm());
-    VecX shift = VecX::Zero(3 * k);
+    VecX shift = VecX::Zero(3 * k), last_shift, last_next;
     const double ke0 = out.energy_before;
     for (int round = 0; round < options.max_shift_rounds; ++round) {
       const VecX u = A * l_c + u0;
@@ -389,16 +392,33 @@ GroupResult resolve_group(const std::vector<GroupBody>& bodies,
       for (int i = 0; i < k; ++i) {
         next[3 * i + 2] = contacts[i].friction * u.segment<2>(3 * i).norm();
       }
-      if ((next - shift).lpNorm<Eigen::Infinity>() <= options.tolerance * 1e2 * speed) break;
-      shift = next;
-      VecX l_try = l_c;
-      bool ok = true;
-      const int used = apgd(op, u0 + shift, l_try, cones, options, ok);
-      out.iterations += used;
-      if (kinetic(bodies, q + MinvJt * l_try) > ke0) break;
+      const VecX residual = next - shift;
+      if (residual.lpNorm<Eigen::Infinity>() <= options.tolerance * 1e2 * speed) break;
+      VecX extrapolated = next;
+      if (round > 0) {
+        const VecX change = residual - (last_next - last_shift);
+        const double squared = change.squaredNorm();
+        if (squared > 0.0) {
+          extrapolated =
+              (next - (residual.dot(change) / squared) * (next - last_next)).cwiseMax(0.0);
+        }
+      }
+      last_shift = shift;
+      last_next = next;
+      bool taken = false;
+      for (const VecX* to : {&extrapolated, &next}) {
+        if (taken || (to == &next && extrapolated == next)) continue;
+        VecX l_try = l_c;
+        bool ok = true;
+        out.iterations += apgd(op, u0 + *to, l_try, cones, options, ok);
+        if (kinetic(bodies, q + MinvJt * l_try) > ke0) continue;
+        shift = *to;
+        l_c = l_try;
+        out.converged = out.converged && ok;
+        taken = true;
+      }
+      if (!taken) break;
       out.shift_rounds = round + 1;
-      l_c = l_try;
-      out.converged = out.converged && ok;
     }
   }
   VecX q_c = q + MinvJt * l_c;
