@@ -191,6 +191,21 @@ bool nonnegative_qp(const MatX& H, const VecX& c, double tolerance, VecX& x) {
   return false;
 }
 
+// The normal components (every third, from 2) of a group vector in the contacts' frames, and
+// the normal-normal block of the group's operator.
+VecX normal_part(const VecX& v) {
+  return Eigen::Map<const VecX, 0, Eigen::InnerStride<3>>(v.data() + 2, v.size() / 3);
+}
+
+MatX normal_block(const MatX& A) {
+  const Eigen::Index k = A.rows() / 3;
+  MatX An(k, k);
+  for (Eigen::Index i = 0; i < k; ++i) {
+    for (Eigen::Index j = 0; j < k; ++j) An(i, j) = A(3 * i + 2, 3 * j + 2);
+  }
+  return An;
+}
+
 // The frictionless plastic LCP on the normals: l_n >= 0, u_n = (A l + b)_n >= 0, l_n u_n = 0, as
 // the convex programme min l.A.l / 2 + b.l over l_n >= 0 (A is positive semidefinite). A may be
 // singular (seven contacts on one body, of six freedoms): the impulses are then not unique, the
@@ -204,12 +219,8 @@ bool normal_lcp(const MatX& A, const VecX& b, double slack, VecX& l) {
   bool approaching = false;
   for (int i = 0; i < k; ++i) approaching = approaching || b[3 * i + 2] < -slack;
   if (!approaching) return false;
-  MatX An(k, k);
-  VecX bn(k);
-  for (int i = 0; i < k; ++i) {
-    bn[i] = b[3 * i + 2];
-    for (int j = 0; j < k; ++j) An(i, j) = A(3 * i + 2, 3 * j + 2);
-  }
+  const MatX An = normal_block(A);
+  const VecX bn = normal_part(b);
   const double diag = std::max(An.diagonal().maxCoeff(), 1e-300);
   const double delta = 1e-12 * diag;
   const MatX H = An + delta * MatX::Identity(k, k);
@@ -234,13 +245,8 @@ bool normal_lcp(const MatX& A, const VecX& b, double slack, VecX& l) {
 VecX stronge_normals(const MatX& A, const VecX& u_start, const VecX& u_base, const VecX& target,
                      const VecX& guess) {
   const int k = static_cast<int>(target.size());
-  MatX Ann(k, k);
-  VecX start(k), base(k);
-  for (int i = 0; i < k; ++i) {
-    start[i] = u_start[3 * i + 2];
-    base[i] = u_base[3 * i + 2];
-    for (int j = 0; j < k; ++j) Ann(i, j) = A(3 * i + 2, 3 * j + 2);
-  }
+  const MatX Ann = normal_block(A);
+  const VecX start = normal_part(u_start), base = normal_part(u_base);
   std::vector<char> on(k);
   for (int i = 0; i < k; ++i) on[i] = target[i] > 0.0;
   auto residual = [&](const VecX& p) {
@@ -405,19 +411,18 @@ GroupResult resolve_group(const std::vector<GroupBody>& bodies,
       }
       last_shift = shift;
       last_next = next;
-      bool taken = false;
-      for (const VecX* to : {&extrapolated, &next}) {
-        if (taken || (to == &next && extrapolated == next)) continue;
+      // A round from the shift `to`, taken unless it would gain energy.
+      auto take = [&](const VecX& to) {
         VecX l_try = l_c;
         bool ok = true;
-        out.iterations += apgd(op, u0 + *to, l_try, cones, options, ok);
-        if (kinetic(bodies, q + MinvJt * l_try) > ke0) continue;
-        shift = *to;
+        out.iterations += apgd(op, u0 + to, l_try, cones, options, ok);
+        if (kinetic(bodies, q + MinvJt * l_try) > ke0) return false;
+        shift = to;
         l_c = l_try;
         out.converged = out.converged && ok;
-        taken = true;
-      }
-      if (!taken) break;
+        return true;
+      };
+      if (!take(extrapolated) && (extrapolated == next || !take(next))) break;
       out.shift_rounds = round + 1;
     }
   }
@@ -445,12 +450,11 @@ GroupResult resolve_group(const std::vector<GroupBody>& bodies,
     const VecX u_c = J * q_c;
     out.iterations += apgd(op, u_c, l_e, disks, options, out.converged);
     if (options.law == RestitutionLaw::kStronge) {
-      const VecX u0n = J * q;
       VecX target(k);
       for (int i = 0; i < k; ++i) {
         // Along the straight impulse path 0 -> l_c the normal velocity is linear in the path
         // parameter: the work is the impulse times the mean of the end velocities.
-        const double w_c = 0.5 * l_c[3 * i + 2] * (u0n[3 * i + 2] + u_c[3 * i + 2]);
+        const double w_c = 0.5 * l_c[3 * i + 2] * (u0[3 * i + 2] + u_c[3 * i + 2]);
         const double e = contacts[i].restitution;
         target[i] = e * e * std::max(-w_c, 0.0);
       }

@@ -19,11 +19,11 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-// A 1 s scene of `bodies` under gravity, one material (mu, e) for every pair.
-Scene make_scene(const nlohmann::json& bodies, double mu, double e) {
+// A 1 s scene of `bodies` under gravity g (downwards), one material (mu, e) for every pair.
+Scene make_scene(const nlohmann::json& bodies, double mu, double e, double g = 9.81) {
   const nlohmann::json doc = {{"format", "palpable-scene/1"},
                               {"name", "simultaneous"},
-                              {"gravity", {0, 0, -9.81}},
+                              {"gravity", {0, 0, -g}},
                               {"end_time", 1.0},
                               {"materials", {{"default", {{"friction", mu}, {"restitution", e}}}}},
                               {"bodies", bodies}};
@@ -247,13 +247,7 @@ std::vector<double> cradle(int strikers, double gap, double e, double v) {
                       {"position", {x, 0, 0}},
                       {"velocity", {i < strikers ? v : 0.0, 0, 0}}});
   }
-  const nlohmann::json doc = {{"format", "palpable-scene/1"},
-                              {"name", "cradle"},
-                              {"gravity", {0, 0, 0}},
-                              {"end_time", 1.0},
-                              {"materials", {{"default", {{"friction", 0.3}, {"restitution", e}}}}},
-                              {"bodies", bodies}};
-  const Scene scene = scene_from_json(doc, "cradle.json");
+  const Scene scene = make_scene(bodies, 0.3, e, /*g=*/0.0);
   Simulation sim(scene.world, SimulationOptions{});
   sim.run_until(1.0, nullptr);
   std::vector<double> out;
