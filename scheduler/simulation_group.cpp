@@ -66,47 +66,70 @@ std::optional<CollisionRecord> Simulation::Impl::collide_group(std::uint32_t ind
   };
   add_contact(index, first, body(p0.a).state, body(p0.b).state);
   if (members.empty()) return std::nullopt;
-  // Every other pair of the collision's dynamic bodies within the envelope at t.
-  std::vector<std::uint32_t> others;
+  // Every pair within the envelope at t that reaches the collision through members' dynamic
+  // bodies: the group is closed under shared bodies (one hop from the first pair only, a ball
+  // dropped onto two balls resting on a floor met the floor under one of them in a group and under
+  // the other alone, 2.3 cm apart in 1 s).
+  std::vector<std::uint32_t> seen{index};
+  std::vector<BodyId> frontier;
   for (BodyId id : {p0.a, p0.b}) {
-    if (!body(id).is_dynamic()) continue;
-    for (std::uint32_t q : pairs.body(id).pairs) {
-      if (q != index && std::find(others.begin(), others.end(), q) == others.end()) {
-        others.push_back(q);
-      }
-    }
+    if (body(id).is_dynamic()) frontier.push_back(id);
   }
-  std::sort(others.begin(), others.end());
-  for (std::uint32_t q_index : others) {
-    const PairSet::Pair& q = pairs.pair(q_index);
-    if (island(q.a) || island(q.b)) return std::nullopt;
-    const BodyState s1 = state_at(q.a), s2 = state_at(q.b);
-    PairCache cache;  // fresh: the pair's own cache stays as its schedule left it
-    ++stats.bound_queries;
-    const DistanceResult dr =
-        closest_features(pairs.geometry(q.a), Pose{s1.x_W, s1.q_WM}, pairs.geometry(q.b),
-                         Pose{s2.x_W, s2.q_WM}, cache, settings().distance_max_steps);
-    const DistanceResult& contact = contact_result(q, s1, s2, dr);
-    if (contact.status == ContactStatus::kFailed || contact.status == ContactStatus::kPenetrating ||
-        contact.distance > settings().envelope_m) {
-      continue;
-    }
-    // Sequential where the physics is: a contact whose instant of touching is still ahead
-    // collides then, on its own (exact for spheres and planes, followed along the trajectories
-    // otherwise).
-    if (!micro && contact.distance > touching_gap(q)) {
-      const ToiBound ahead =
-          time_to_touch(body(q.a), s1, pairs.geometry(q.a), body(q.b), s2, pairs.geometry(q.b),
-                        contact, cache, world.gravity_W, settings());
-      if (ahead.exact && ahead.dt > 0.0) continue;
-      if (!ahead.exact && !persistent()) {
-        const ImpactInstant in = refine_instant(q, s1, s2, dr, cache);
-        if (in.status != InstantStatus::kNotApplicable && in.dt > 0.0) continue;
+  std::vector<BodyId> expanded;
+  while (!frontier.empty()) {
+    std::vector<std::uint32_t> others;
+    for (BodyId id : frontier) {
+      expanded.push_back(id);
+      for (std::uint32_t q : pairs.body(id).pairs) {
+        if (std::find(seen.begin(), seen.end(), q) == seen.end()) {
+          seen.push_back(q);
+          others.push_back(q);
+        }
       }
     }
-    const Contact c = make_contact(side(q.a, s1), side(q.b, s2), contact, settings(),
-                                   world.gravity_W, /*with_patch=*/true);
-    add_contact(q_index, c, s1, s2);
+    frontier.clear();
+    std::sort(others.begin(), others.end());
+    for (std::uint32_t q_index : others) {
+      const PairSet::Pair& q = pairs.pair(q_index);
+      if (island(q.a) || island(q.b)) return std::nullopt;
+      const BodyState s1 = state_at(q.a), s2 = state_at(q.b);
+      PairCache cache;  // fresh: the pair's own cache stays as its schedule left it
+      ++stats.bound_queries;
+      const DistanceResult dr =
+          closest_features(pairs.geometry(q.a), Pose{s1.x_W, s1.q_WM}, pairs.geometry(q.b),
+                           Pose{s2.x_W, s2.q_WM}, cache, settings().distance_max_steps);
+      const DistanceResult& contact = contact_result(q, s1, s2, dr);
+      if (contact.status == ContactStatus::kFailed ||
+          contact.status == ContactStatus::kPenetrating ||
+          contact.distance > settings().envelope_m) {
+        continue;
+      }
+      // Sequential where the physics is: a contact whose instant of touching is still ahead
+      // collides then, on its own (exact for spheres and planes, followed along the trajectories
+      // otherwise).
+      if (!micro && contact.distance > touching_gap(q)) {
+        const ToiBound ahead =
+            time_to_touch(body(q.a), s1, pairs.geometry(q.a), body(q.b), s2, pairs.geometry(q.b),
+                          contact, cache, world.gravity_W, settings());
+        if (ahead.exact && ahead.dt > 0.0) continue;
+        if (!ahead.exact && !persistent()) {
+          const ImpactInstant in = refine_instant(q, s1, s2, dr, cache);
+          if (in.status != InstantStatus::kNotApplicable && in.dt > 0.0) continue;
+        }
+      }
+      const Contact c = make_contact(side(q.a, s1), side(q.b, s2), contact, settings(),
+                                     world.gravity_W, /*with_patch=*/true);
+      const std::size_t before = members.size();
+      add_contact(q_index, c, s1, s2);
+      if (members.size() == before) continue;
+      for (BodyId id : {q.a, q.b}) {
+        if (body(id).is_dynamic() &&
+            std::find(expanded.begin(), expanded.end(), id) == expanded.end() &&
+            std::find(frontier.begin(), frontier.end(), id) == frontier.end()) {
+          frontier.push_back(id);
+        }
+      }
+    }
   }
   if (members.size() < 2) return std::nullopt;
 
