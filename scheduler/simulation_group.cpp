@@ -70,25 +70,30 @@ std::optional<CollisionRecord> Simulation::Impl::collide_group(std::uint32_t ind
   // bodies: the group is closed under shared bodies (one hop from the first pair only, a ball
   // dropped onto two balls resting on a floor met the floor under one of them in a group and under
   // the other alone, 2.3 cm apart in 1 s).
-  std::vector<std::uint32_t> seen{index};
-  std::vector<BodyId> frontier;
+  // The bodies reached, in the order they are expanded; [level_begin, level_end) is this level.
+  // A pair is gathered once: from the first level that holds one of its bodies.
+  std::vector<BodyId> reached;
   for (BodyId id : {p0.a, p0.b}) {
-    if (body(id).is_dynamic()) frontier.push_back(id);
+    if (body(id).is_dynamic()) reached.push_back(id);
   }
-  std::vector<BodyId> expanded;
-  while (!frontier.empty()) {
+  auto position = [&](BodyId id) {
+    return static_cast<std::size_t>(std::find(reached.begin(), reached.end(), id) -
+                                    reached.begin());
+  };
+  for (std::size_t level_begin = 0; level_begin < reached.size();) {
+    const std::size_t level_end = reached.size();
     std::vector<std::uint32_t> others;
-    for (BodyId id : frontier) {
-      expanded.push_back(id);
-      for (std::uint32_t q : pairs.body(id).pairs) {
-        if (std::find(seen.begin(), seen.end(), q) == seen.end()) {
-          seen.push_back(q);
+    for (std::size_t i = level_begin; i < level_end; ++i) {
+      for (std::uint32_t q : pairs.body(reached[i]).pairs) {
+        const PairSet::Pair& pq = pairs.pair(q);
+        if (q != index && position(pq.a == reached[i] ? pq.b : pq.a) >= level_begin) {
           others.push_back(q);
         }
       }
     }
-    frontier.clear();
     std::sort(others.begin(), others.end());
+    others.erase(std::unique(others.begin(), others.end()), others.end());
+    level_begin = level_end;
     for (std::uint32_t q_index : others) {
       const PairSet::Pair& q = pairs.pair(q_index);
       if (island(q.a) || island(q.b)) return std::nullopt;
@@ -123,11 +128,7 @@ std::optional<CollisionRecord> Simulation::Impl::collide_group(std::uint32_t ind
       add_contact(q_index, c, s1, s2);
       if (members.size() == before) continue;
       for (BodyId id : {q.a, q.b}) {
-        if (body(id).is_dynamic() &&
-            std::find(expanded.begin(), expanded.end(), id) == expanded.end() &&
-            std::find(frontier.begin(), frontier.end(), id) == frontier.end()) {
-          frontier.push_back(id);
-        }
+        if (body(id).is_dynamic() && position(id) == reached.size()) reached.push_back(id);
       }
     }
   }
