@@ -242,7 +242,7 @@ std::optional<CollisionRecord> Simulation::Impl::check_pair(std::uint32_t index,
     p.last_collision_t = t;
     p.collisions_at_t = 0;
   }
-  if (auto group = collide_group(index, c, t)) return group;
+  if (auto group = collide_group(index, c, contact, t)) return group;
   mark_held_rotations(p, c, t);
   if (persistent()) return collide_or_hold(index, c, DistanceResult(contact), t);
   CollisionRecord record = collide(p, c, t);

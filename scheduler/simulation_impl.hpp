@@ -189,9 +189,14 @@ struct Simulation::Impl {
   // `index`'s collision at instant t with an impact's approach (faster than the microcollision
   // speed) - the corners of a face landing on a dynamic face, and the contacts of every pair of
   // the collision's dynamic bodies within the envelope - resolved as one group when there are
-  // two or more. Returns nothing (and changes nothing) for a single contact, or when a body is
-  // held: the pair's own collision path then resolves it.
-  std::optional<CollisionRecord> collide_group(std::uint32_t index, const Contact& c, double t);
+  // two or more. Returns nothing (and changes nothing) for a single contact, or under the
+  // microcollision model when a body is held: the pair's own collision path then resolves it.
+  // `dr` is the pair's contact query. Under the persistent model the held contacts of the
+  // struck bodies on fixed supports are members too (plastic, at each point of their patch, not
+  // held again), and the group's other contacts go on as a lone collision's would
+  // (collide_or_hold): held if they leave slowly, else their islands planned again.
+  std::optional<CollisionRecord> collide_group(std::uint32_t index, const Contact& c,
+                                               const DistanceResult& dr, double t);
 
   // ---------------------------------------------------------------- persistent contact
 
