@@ -211,6 +211,40 @@ TEST_CASE("persistent model: a ball dropped onto two held balls or a held seam s
   }
 }
 
+TEST_CASE("persistent model: two balls dropped symmetrically onto a held third stay mirror images",
+          "[scenarios][group]") {
+  // A 1 kg ball rests held on the floor; two 1 kg balls fall 0.05 m onto it at +-30 degrees from
+  // its top and meet it at one instant: one group with its held floor contact as a plastic
+  // member. Struck one at a time (a0e5af1) they ended 1.7e-2 m (mu 0.5, e 0) and 9.1e-5 m
+  // (mu 0.5, e 0.5) off their mirror images within 1 s.
+  const double radius = 0.05;
+  const nlohmann::json settings = {{"contact_model", "persistent"}};
+  const nlohmann::json ball = {{"type", "sphere"}, {"radius", radius}};
+  const double dx = 2 * radius * std::sin(kPi / 6);
+  const double z = radius + 2 * radius * std::cos(kPi / 6) + 0.05;
+  for (double mu : {0.0, 0.5}) {
+    for (double e : {0.0, 0.5}) {
+      CAPTURE(mu, e);
+      const nlohmann::json bodies = {
+          {{"name", "floor"},
+           {"motion", "fixed"},
+           {"shape", {{"type", "halfspace"}, {"normal", {0, 0, 1}}, {"offset", 0}}}},
+          {{"name", "L"}, {"mass", 1.0}, {"shape", ball}, {"position", {-dx, 0, z}}},
+          {{"name", "R"}, {"mass", 1.0}, {"shape", ball}, {"position", {dx, 0, z}}},
+          {{"name", "third"}, {"mass", 1.0}, {"shape", ball}, {"position", {0, 0, radius}}}};
+      double asymmetry = 0.0;
+      every_10_ms(make_scene(bodies, mu, e, 9.81, settings), [&](const Simulation& sim, double t) {
+        const BodyState l = sim.state_at(BodyId{1}, t), r = sim.state_at(BodyId{2}, t);
+        const BodyState third = sim.state_at(BodyId{3}, t);
+        asymmetry = std::max({asymmetry, std::abs(l.x_W.x() + r.x_W.x()),
+                              std::abs(l.x_W.z() - r.x_W.z()), std::abs(third.x_W.x()),
+                              std::abs(third.x_W.y()), std::abs(l.x_W.y()), std::abs(r.x_W.y())});
+      });
+      CHECK(asymmetry <= 1e-9);
+    }
+  }
+}
+
 namespace {
 
 // Every collision record of a run.
