@@ -74,8 +74,7 @@ std::optional<CollisionRecord> Simulation::Impl::collide_group(std::uint32_t ind
   auto add_contact = [&](std::uint32_t pair, const Contact& c, const DistanceResult& dr,
                          const BodyState& s1, const BodyState& s2) {
     const double u_n = normal_velocity(c, s1, s2);
-    const double v_hold =
-        std::max(c.v_micro, microcollision_speed(settings(), std::abs(world.gravity_W.dot(c.n_W))));
+    const double v_hold = hand_over_speed(c);
     if (gentle && u_n <= micro_join && u_n >= -impact_speed && c.v_micro > 0.0) {
       members.push_back(Member{pair, c.a, c.b, c.point_W, c.n_W, -u_n, micro ? c.v_micro : 0.0, dr,
                                v_hold, c.patch.size() >= 2});
@@ -122,12 +121,8 @@ std::optional<CollisionRecord> Simulation::Impl::collide_group(std::uint32_t ind
       // patch: the ground takes its part of the impulse at once (struck on their free masses
       // and projected after, two cubes hit on their seam turned and knocked each other apart).
       // Between two dynamic bodies the island's plan projects it after the group.
-      bool held_link = false;
-      if (const Island* is = island(q.a) ? island(q.a) : island(q.b)) {
-        held_link = std::any_of(is->links.begin(), is->links.end(),
-                                [&](const HeldLink& link) { return link.pair == q_index; });
-      }
-      if (held_link && body(q.a).is_dynamic() && body(q.b).is_dynamic()) continue;
+      const bool already_held = persistent() && held_link(q_index);
+      if (already_held && body(q.a).is_dynamic() && body(q.b).is_dynamic()) continue;
       const BodyState s1 = state_at(q.a), s2 = state_at(q.b);
       PairCache cache;  // fresh: the pair's own cache stays as its schedule left it
       ++stats.bound_queries;
@@ -157,7 +152,7 @@ std::optional<CollisionRecord> Simulation::Impl::collide_group(std::uint32_t ind
       }
       const Contact c = make_contact(side(q.a, s1), side(q.b, s2), contact, settings(),
                                      world.gravity_W, /*with_patch=*/true);
-      if (held_link) {
+      if (already_held) {
         const std::vector<Vec3> points =
             c.patch.size() >= 2 ? c.patch : std::vector<Vec3>{c.point_W};
         for (const Vec3& point : points) {
@@ -241,10 +236,7 @@ std::optional<CollisionRecord> Simulation::Impl::collide_group(std::uint32_t ind
 
   // Each pair's round at this instant (collide_or_hold), before the records below stamp it.
   std::vector<int> rounds;
-  for (const Member& m : members) {
-    const PairSet::Pair& q = pairs.pair(m.pair);
-    rounds.push_back(t == q.last_collision_t ? q.collisions_at_t : 0);
-  }
+  for (const Member& m : members) rounds.push_back(collision_round(pairs.pair(m.pair), t));
   std::vector<CollisionRecord> records;
   std::vector<bool> counted(ids.size(), false);
   for (std::size_t i = 0; i < members.size(); ++i) {

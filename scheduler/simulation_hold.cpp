@@ -26,12 +26,9 @@ CollisionRecord Simulation::Impl::collide_or_hold(std::uint32_t index, Contact& 
   // restitution. Its limit is the plastic collision, taken at once from the third round; from
   // the fifth, a hold that keeps letting go at once gives way to a microcollision, whose
   // rebound floor moves the pair on in time.
-  const int round = t == p.last_collision_t ? p.collisions_at_t : 0;
+  const int round = collision_round(p, t);
   const std::optional<HeldLink> link = round >= 4 ? std::optional<HeldLink>() : link_of(index, dr);
-  // The hand-over speed: the microcollision speed of the bodies' weight along the normal (a
-  // held body's acceleration may be zero, its weight is not).
-  const double v_hold =
-      std::max(c.v_micro, microcollision_speed(settings(), std::abs(world.gravity_W.dot(c.n_W))));
+  const double v_hold = hand_over_speed(c);
   const bool gentle =
       -initial_normal_velocity(c) <= v_hold * (1.0 + settings().microcollision_speed_slack);
   ResolveOptions options;

@@ -10,11 +10,14 @@
 #include "core/ballistic.hpp"
 #include "distance/impact_instant.hpp"
 #include "distance/toi_bound.hpp"
+#include "impulse/microcollision.hpp"
 #include "scheduler/contact.hpp"
 #include "scheduler/island.hpp"
 #include "scheduler/pair_set.hpp"
 #include "scheduler/simulation.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <optional>
 #include <vector>
 
@@ -54,6 +57,14 @@ struct Simulation::Impl {
   const Island* island(BodyId id) const {
     const int i = island_of.empty() ? -1 : island_of[id.index];
     return i >= 0 ? &islands[static_cast<std::size_t>(i)] : nullptr;
+  }
+
+  // Is pair `index` one of the held links of its bodies' island?
+  bool held_link(std::uint32_t index) const {
+    const PairSet::Pair& p = pairs.pair(index);
+    const Island* is = island(p.a) ? island(p.a) : island(p.b);
+    return is && std::any_of(is->links.begin(), is->links.end(),
+                             [&](const HeldLink& link) { return link.pair == index; });
   }
 
   // The island of a held body whose motion is planned, or null (free flight: not held, or held
@@ -210,6 +221,18 @@ struct Simulation::Impl {
   // under Mirtich's model.
   CollisionRecord collide_or_hold(std::uint32_t index, Contact& c, const DistanceResult& dr,
                                   double t);
+
+  // The collide_or_hold round of pair `p` at instant t: how many times it collided there before.
+  static int collision_round(const PairSet::Pair& p, double t) {
+    return t == p.last_collision_t ? p.collisions_at_t : 0;
+  }
+  // The hand-over speed of a contact: the microcollision speed of the bodies' weight along the
+  // normal (a held body's acceleration may be zero, its weight is not). A collision that leaves
+  // the contact slower is held.
+  double hand_over_speed(const Contact& c) const {
+    return std::max(c.v_micro,
+                    microcollision_speed(settings(), std::abs(world.gravity_W.dot(c.n_W))));
+  }
 
   // The link that would hold pair `index`'s contact (closest features `dr`, states at t).
   std::optional<HeldLink> link_of(std::uint32_t index, const DistanceResult& dr) const;
