@@ -501,6 +501,38 @@ Vec3 smooth_support_M(const Shape& shape, const Vec3& d) {
   return Vec3::Zero();
 }
 
+Mat3 smooth_support_derivative_M(const Shape& shape, const Vec3& d_in) {
+  const double length = d_in.norm();
+  if (!(length > 0.0)) return Mat3::Zero();
+  const Vec3 d = d_in / length;
+  const Mat3 I = Mat3::Identity();
+  // A ball of radius r about a centre: s = centre + r d / |d|, ds/dd = r (I - d d^T) at |d| = 1.
+  auto ball = [&](double r) { return Mat3(r * (I - d * d.transpose())); };
+  if (const auto* e = std::get_if<Ellipsoid>(&shape)) {
+    // s = A^2 d / L with L = |A d|: ds/dd = (A^2 - s s^T) / L (dL/dd = s).
+    const Vec3 a2 = e->semi_axes_M.cwiseProduct(e->semi_axes_M);
+    const double L = e->semi_axes_M.cwiseProduct(d).norm();
+    const Vec3 s = a2.cwiseProduct(d) / L;
+    return (Mat3(a2.asDiagonal()) - s * s.transpose()) / L;
+  }
+  if (const auto* c = std::get_if<Cylinder>(&shape)) {
+    // On a rim: s = (r d_xy / |d_xy|, +-h); ds/dd = r / |d_xy| (P_xy - e e^T), e = d_xy / |d_xy|.
+    const double radial = std::hypot(d.x(), d.y());
+    if (!(radial > 0.0) || d.z() == 0.0) return Mat3::Zero();
+    const Vec3 e(d.x() / radial, d.y() / radial, 0.0);
+    Mat3 P = Mat3::Zero();
+    P(0, 0) = P(1, 1) = 1.0;
+    return c->radius / radial * (P - e * e.transpose());
+  }
+  if (const auto* c = std::get_if<Capsule>(&shape)) {
+    if (d.z() == 0.0) return Mat3::Zero();
+    return ball(c->radius);
+  }
+  if (const auto* b = std::get_if<LoadedBall>(&shape)) return ball(b->radius);
+  PALPABLE_CHECK(false, "smooth_support_derivative_M needs a smooth convex shape");
+  return Mat3::Zero();
+}
+
 Compound make_compound(std::vector<CompoundPart> parts) {
   if (parts.empty()) throw InputError("parts", "a compound needs at least one part");
   for (std::size_t i = 0; i < parts.size(); ++i) {

@@ -155,6 +155,14 @@ bool is_smooth_convex(const Shape& shape);
 // The support point of a smooth convex shape in M: a point of the shape maximising
 // direction_M . x (exact, closed form). A zero direction gives a point of the shape.
 Vec3 smooth_support_M(const Shape& shape, const Vec3& direction_M);
+// The derivative of that support point with respect to a unit direction d (3 x 3, symmetric, d in
+// its null space): how the touching point moves over the surface as the direction turns - the
+// surface's radii of curvature in the plane normal to d (R (I - d d^T) for a ball of radius R; a
+// cylinder's rim, rank one along the rim: R / |d_xy| along the rim's tangent). Closed form, for a
+// direction at which the support point is unique and smooth: not along a cylinder's or capsule's
+// axis direction where a cap or a side would touch (a cylinder: d_xy = 0 or d_z = 0; a capsule:
+// d_z = 0), where it returns zero.
+Mat3 smooth_support_derivative_M(const Shape& shape, const Vec3& direction_M);
 
 // A convex piece of a compound, posed in the compound's modelling frame.
 struct CompoundPart {

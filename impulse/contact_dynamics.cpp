@@ -105,6 +105,13 @@ Kinematics kinematics(const HeldContact& c, const std::vector<HeldBody>& bodies)
     k.Jm.rightCols<3>() = c.sphere_radius * skew(c.n_W) - skew(r_q);
     k.slip_bias = k.m.w.cross(k.m.w.cross(r_q)) - c.sphere_radius * k.m.w.cross(k.n_dot);
     p_dot = k.m.v + k.m.w.cross(r_q) - c.sphere_radius * k.n_dot;
+  } else if (c.curved) {
+    // A point of a curved surface moving over it at s_dot: d/dt (v + w x r) along the moving
+    // point is a + alpha x r + w x (w x r) + w x s_dot.
+    const Vec3 s_dot = c.curvature_W * (k.m.w.cross(c.n_W) - k.n_dot);
+    k.Jm.rightCols<3>() = -skew(k.r_m);
+    k.slip_bias = k.m.w.cross(k.m.w.cross(k.r_m)) + k.m.w.cross(s_dot);
+    p_dot = u_m + s_dot;
   } else {
     k.Jm.rightCols<3>() = -skew(k.r_m);
     k.slip_bias = k.m.w.cross(k.m.w.cross(k.r_m));
@@ -148,7 +155,7 @@ double turning_size(const HeldContact& c) {
   switch (c.patch) {
     case PatchKind::kPolygon: return c.friction > 0.0 ? c.torsion_arm / c.friction : 0.0;
     case PatchKind::kSegment: return c.segment_hi - c.segment_lo;
-    case PatchKind::kPoint: return c.sphere_radius;
+    case PatchKind::kPoint: return point_size(c);
   }
   return 0.0;
 }
@@ -184,7 +191,7 @@ class Assembly {
       // sliding couplings here: the impulses are small by construction).
       c.sticks = c.slip_stopped || plane_coords(c, m.slip_W).norm() <= still;
       c.spin_sticks = c.spin_stopped || std::abs(m.dw_W.dot(c.n_W)) * turning_size(c) <= still;
-      c.roll_sticks = c.roll_stopped || plane_coords(c, m.dw_W).norm() * c.sphere_radius <= still;
+      c.roll_sticks = c.roll_stopped || plane_coords(c, m.dw_W).norm() * point_size(c) <= still;
       if (!c.sticks) c.friction = 0.0;
       if (!c.spin_sticks) c.torsion_arm = 0.0;
       if (!c.roll_sticks) c.rolling_resistance = 0.0;
@@ -797,7 +804,7 @@ HeldModes choose_held_modes(const std::vector<HeldBody>& bodies, std::vector<Hel
     c.spin_sticks = c.spin_stopped || std::abs(spin) * turning_size(c) <= still;
     if (!c.spin_sticks) c.spin_sign = spin > 0.0 ? 1.0 : -1.0;
     const Vec2 rolling = plane_coords(c, m.dw_W);
-    c.roll_sticks = c.roll_stopped || rolling.norm() * std::max(c.sphere_radius, 1e-300) <= still;
+    c.roll_sticks = c.roll_stopped || rolling.norm() * std::max(point_size(c), 1e-300) <= still;
     if (!c.roll_sticks) c.roll_dir = rolling.normalized();
   }
   const int budget = 8 + 4 * static_cast<int>(contacts.size());

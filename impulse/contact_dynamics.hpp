@@ -84,6 +84,17 @@ struct HeldContact {
   double sphere_radius = 0.0;
   // A rounded mover's core point above c, c + R n, from its centre of mass (zero for a sphere).
   Vec3 core_offset_W = Vec3::Zero();
+  // A smooth mover touching with a point of its curved surface (an ellipsoid, a cylinder's rim, a
+  // loaded ball), sphere_radius 0: c is that point, on the mover. Rolling moves it over the
+  // surface at ds/dt = H (w_mover x n - dn/dt), H = curvature_W the derivative of the mover's
+  // support point with respect to the direction at -n (its radii of curvature in the tangent
+  // plane; core/shape.hpp smooth_support_derivative_M), which adds w_mover x ds/dt to the contact
+  // point's acceleration (Montana, "The kinematics of contact and grasp", IJRR 1988, for the
+  // contact point's motion over the surfaces). `curved_size` [m] stands for the sphere's radius
+  // where turning is measured (a spin or rolling judged still).
+  bool curved = false;
+  Mat3 curvature_W = Mat3::Zero();
+  double curved_size = 0.0;
   // The normal's rate when it does not simply turn with the support (two spheres, a sphere on an
   // edge, an edge across an edge: the normal follows the closest points of two features).
   bool has_n_dot = false;
@@ -114,6 +125,12 @@ struct HeldContact {
   bool roll_sticks = true;  // rolling resistance: not rolling (else rolling along roll_dir)
   Vec2 roll_dir = Vec2::UnitX();
 };
+
+// The length over which a point contact's relative turning is measured: a sphere's radius, a
+// curved mover's size (0 for a polyhedron's vertex).
+inline double point_size(const HeldContact& c) {
+  return c.sphere_radius > 0.0 ? c.sphere_radius : (c.curved ? c.curved_size : 0.0);
+}
 
 // What each contact carries.
 struct HeldContactForces {

@@ -204,9 +204,12 @@ std::optional<HeldLink> make_held_link(std::uint32_t pair, BodyId a, BodyId b,
   // is not (see curved_contact).
   const double round1 = round_side_radius(side_a.geometry, closest.piece1, geometry.feature1);
   const double round2 = round_side_radius(side_b.geometry, closest.piece2, geometry.feature2);
-  if ((round1 == 0.0 && curved_contact(side_a.geometry, closest.piece1, geometry.feature1)) ||
-      (round2 == 0.0 && curved_contact(side_b.geometry, closest.piece2, geometry.feature2)) ||
-      (round1 > 0.0 && !plane2) || (round2 > 0.0 && !plane1)) {
+  const bool curved1 =
+      round1 == 0.0 && curved_contact(side_a.geometry, closest.piece1, geometry.feature1);
+  const bool curved2 =
+      round2 == 0.0 && curved_contact(side_b.geometry, closest.piece2, geometry.feature2);
+  if ((curved1 && !plane2) || (curved2 && !plane1) || (round1 > 0.0 && !plane2) ||
+      (round2 > 0.0 && !plane1)) {
     return std::nullopt;
   }
   if (!plane1 && !plane2) return point_pair_link(pair, a, b, side_a, side_b, closest, geometry);
@@ -241,13 +244,10 @@ std::optional<HeldLink> make_held_link(std::uint32_t pair, BodyId a, BodyId b,
   }
   const ShapeGeometry& mg = mover.geometry;
   const double round = support_is_b ? round1 : round2;
-  if (round > 0.0) {
-    // The core under the contact line: the piece's own axis (exact, material), not the query's
-    // points (a closest-feature query places them only to its tolerance, and a core off the axis
-    // would lift and drop the body as it rolls).
-    link.sphere_radius = round;
-    // On a face, the face's own plane too (the query's normal from GJK is as loose as its points:
-    // a plane tilted by 1e-5 would be rolled up or down).
+  const bool curved = support_is_b ? curved1 : curved2;
+  if (round > 0.0 || curved) {
+    // On a face, the face's own plane (the query's normal from GJK is as loose as its points: a
+    // plane tilted by 1e-5 would be rolled up or down).
     if (support_feature.size() >= 3) {
       Vec3 face_n = Vec3::Zero();
       for (std::size_t i = 0; i < support_feature.size(); ++i) {
@@ -260,8 +260,34 @@ std::optional<HeldLink> make_held_link(std::uint32_t pair, BodyId a, BodyId b,
         link.t1_S = link.normal_S.unitOrthogonal();
       }
     }
-    const ShapeGeometry::Piece& piece =
-        mg.pieces()[static_cast<std::size_t>(support_is_b ? closest.piece1 : closest.piece2)];
+  }
+  const ShapeGeometry::Piece* mover_piece = nullptr;
+  {
+    const int index = support_is_b ? closest.piece1 : closest.piece2;
+    if (index >= 0 && index < static_cast<int>(mg.pieces().size())) {
+      mover_piece = &mg.pieces()[static_cast<std::size_t>(index)];
+    }
+  }
+  if (curved) {
+    // The touching point is the shape's support point against the normal, found afresh at every
+    // state (place_link): a smooth piece, or a loaded ball (a sphere piece about its centre,
+    // whose shape places the centre itself).
+    if (mover_piece == nullptr) return std::nullopt;
+    if (mover_piece->kind == ShapeGeometry::PieceKind::kSmooth && mover_piece->smooth) {
+      link.curved_shape = mover_piece->smooth;
+      link.piece_p_M = mover_piece->p_M;
+      link.piece_R_M = mover_piece->R_M;
+    } else if (std::holds_alternative<LoadedBall>(mg.shape())) {
+      link.curved_shape = &mg.shape();
+    } else {
+      return std::nullopt;
+    }
+  } else if (round > 0.0) {
+    // The core under the contact line: the piece's own axis (exact, material), not the query's
+    // points (a closest-feature query places them only to its tolerance, and a core off the axis
+    // would lift and drop the body as it rolls).
+    link.sphere_radius = round;
+    const ShapeGeometry::Piece& piece = *mover_piece;
     double half = 0.0;
     if (const auto* cylinder = std::get_if<Cylinder>(piece.smooth)) half = cylinder->half_height;
     if (const auto* capsule = std::get_if<Capsule>(piece.smooth)) half = capsule->half_length;
@@ -372,7 +398,17 @@ bool place_link(const HeldLink& link, const BodyState& mover, const BodyState& s
   out.sphere_radius = link.sphere_radius;
   std::vector<Vec2> feature;
   std::vector<double> heights;
-  if (link.sphere_radius > 0.0 && link.mover_feature_M.empty()) {
+  out.curved = link.curved_shape != nullptr;
+  if (out.curved) {
+    // The curved surface's lowest point against the plane, and how it moves over the surface.
+    const Mat3 R = R_M * link.piece_R_M;
+    const Vec3 d = R.transpose() * -n;
+    const Vec3 c = mover.x_W + R_M * link.piece_p_M + R * smooth_support_M(*link.curved_shape, d);
+    feature.push_back(project(c));
+    heights.push_back(n.dot(c - origin));
+    out.curvature_W = R * smooth_support_derivative_M(*link.curved_shape, d) * R.transpose();
+    out.curved_size = max_radius(*link.curved_shape);
+  } else if (link.sphere_radius > 0.0 && link.mover_feature_M.empty()) {
     const Vec3 c = mover.x_W - link.sphere_radius * n;
     feature.push_back(project(c));
     heights.push_back(n.dot(c - origin));
@@ -494,10 +530,12 @@ Problem build_problem(const Island& island, const World& world,
     const Material& m = world.material(link.mover, link.support);
     c.friction = m.friction;
     c.spinning_resistance = m.spinning_resistance;
-    // Rolling resistance acts at a sphere's point (impulse/contact_dynamics.hpp), not along a
-    // rounded segment's line.
+    // Rolling resistance acts at a point of a sphere or a curved surface
+    // (impulse/contact_dynamics.hpp), not along a rounded segment's line.
     c.rolling_resistance =
-        link.sphere_radius > 0.0 && link.mover_feature_M.empty() ? m.rolling_resistance : 0.0;
+        (link.sphere_radius > 0.0 && link.mover_feature_M.empty()) || link.curved_shape
+            ? m.rolling_resistance
+            : 0.0;
     set_torsion_arm(c);
     c.sticks = link.sticks;
     c.slip_dir = link.slip_dir;
@@ -522,7 +560,7 @@ Problem build_problem(const Island& island, const World& world,
         c.spin_sign = spin > 0.0 ? 1.0 : -1.0;
       }
       const Vec2 roll(now[i].dw_W.dot(c.t1_W), now[i].dw_W.dot(c.t2_W));
-      if (!c.roll_sticks && roll.norm() * c.sphere_radius > still) c.roll_dir = roll.normalized();
+      if (!c.roll_sticks && roll.norm() * point_size(c) > still) c.roll_dir = roll.normalized();
     }
   }
   return p;
@@ -719,6 +757,26 @@ Island::PlanResult Island::plan(World& world, const std::vector<const ShapeGeome
     const int k = index_of(id);
     return k >= 0 ? anchor_[static_cast<std::size_t>(k)] : world.bodies[id.index].state;
   };
+  // A curved contact's point is found afresh from the shape at every state, so only the
+  // integration keeps it at the held gap (the accelerations hold the gap's second derivative at
+  // zero, to the integration's tolerance): Euler's disk rose 6e-9 m in 2 s. That drift is taken
+  // out here, moving the body along the normal, where the link is the body's only one.
+  for (const HeldLink& link : links) {
+    const int km = index_of(link.mover);
+    if (!link.curved_shape || km < 0) continue;
+    const auto touches = [&](const HeldLink& l) {
+      return l.mover == link.mover || l.support == link.mover;
+    };
+    if (std::count_if(links.begin(), links.end(), touches) != 1) continue;
+    BodyState& sm = anchor_[static_cast<std::size_t>(km)];
+    const BodyState ss = state_of(link.support);
+    HeldContact c;
+    if (!place_link(link, sm, ss, c)) continue;
+    const double height = c.n_W.dot(c.c_W - (ss.x_W + rotation(ss) * link.point_S));
+    if (std::abs(height - link.gap) <= 0.5 * settings.envelope_m) {
+      sm.x_W += (link.gap - height) * c.n_W;
+    }
+  }
   HeldModes modes;
   Problem p;
   std::vector<HeldContact> before;  // the contacts before the modes are chosen
@@ -1340,21 +1398,21 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
         if (c.roll_sticks) {
           e[6].value = c.rolling_resistance * N - f.rolling.norm();
         } else {
-          e[6].value = roll.norm() * c.sphere_radius - still_speed;
+          e[6].value = roll.norm() * point_size(c) - still_speed;
           if (i < reference.size()) {
             e[7].value = roll.dot(plane_coords(c, reference[i].dw).normalized());
           }
         }
       }
-      // Another vertex of a polyhedral mover reaching the plane.
+      // Another part of the mover reaching the plane: another vertex of a polyhedron; for a
+      // cylinder held on a rim, the rim's far side (it lands on its cap) or the other rim (on its
+      // side); for a capsule held on one end, the other end. A sphere, an ellipsoid or a loaded
+      // ball has nothing else that can touch.
       const int km = index_of(link.mover);
       if (link.sphere_radius > 0.0 || km < 0 || link.point_pair) continue;
       const ShapeGeometry& g = *geometry[link.mover.index];
-      if (g.pieces().size() != 1 || !g.pieces()[0].mesh) continue;
-      const ShapeGeometry::Piece& piece = g.pieces()[0];
+      if (!link.curved_shape && (g.pieces().size() != 1 || !g.pieces()[0].mesh)) continue;
       const BodyState& sm = states[static_cast<std::size_t>(km)];
-      const Mat3 R = rotation(sm) * piece.R_M;
-      const Vec3 origin = sm.x_W + rotation(sm) * piece.p_M;
       // Heights above the support's plane: another vertex lands when it comes down to half the
       // held feature's height (a vertex lower than the feature but rising, the other end of an
       // edge the body tips up from, has not landed; one at the feature's height must go down).
@@ -1368,20 +1426,44 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
                      : world.bodies[link.support.index].state);
       const Vec3 plane = ss.x_W + rotation(ss) * link.point_S;
       double lowest = kInfinity, feature_lowest = kInfinity;
-      const double tol = 1e-9 * size;
-      const Mat3 R_body = rotation(sm);
-      for (const Vec3& f : link.mover_feature_M) {
-        feature_lowest = std::min(feature_lowest, c.n_W.dot(sm.x_W + R_body * f - plane));
-      }
-      for (int v = 0; v < piece.mesh->num_vertices(); ++v) {
-        const Vec3 q_M = piece.p_M + piece.R_M * piece.mesh->vertex(v);
-        bool held_vertex = false;
-        for (const Vec3& f : link.mover_feature_M) {
-          held_vertex = held_vertex || (f - q_M).norm() <= tol;
+      if (link.curved_shape) {
+        // The other part's height above the touching point, from the direction d of -n in the
+        // piece's frame: the rim's far side 2 r |d_xy|, the other rim 2 h |d_z|.
+        const Vec3 d = (rotation(sm) * link.piece_R_M).transpose() * -c.n_W;
+        double rise = kInfinity;
+        if (const auto* cylinder = std::get_if<Cylinder>(link.curved_shape)) {
+          rise = 2.0 * std::min(cylinder->half_height * std::abs(d.z()),
+                                cylinder->radius * std::hypot(d.x(), d.y()));
+        } else if (const auto* capsule = std::get_if<Capsule>(link.curved_shape)) {
+          rise = 2.0 * capsule->half_length * std::abs(d.z());
+        } else {
+          continue;
         }
-        if (held_vertex) continue;
-        const Vec3 q = origin + R * piece.mesh->vertex(v);
-        lowest = std::min(lowest, c.n_W.dot(q - plane));
+        // It lands when it comes within half the held point's height (at least a quarter
+        // envelope) of that point: the contact then turns into the cap's face or the side's line
+        // (at the rise's zero the lowest point would jump to the other rim or end).
+        feature_lowest = c.n_W.dot(c.c_W - plane);
+        e[8].value = rise - 0.5 * std::max(feature_lowest, 0.5 * settings.envelope_m);
+        continue;
+      } else {
+        const ShapeGeometry::Piece& piece = g.pieces()[0];
+        const Mat3 R = rotation(sm) * piece.R_M;
+        const Vec3 origin = sm.x_W + rotation(sm) * piece.p_M;
+        const double tol = 1e-9 * size;
+        const Mat3 R_body = rotation(sm);
+        for (const Vec3& f : link.mover_feature_M) {
+          feature_lowest = std::min(feature_lowest, c.n_W.dot(sm.x_W + R_body * f - plane));
+        }
+        for (int v = 0; v < piece.mesh->num_vertices(); ++v) {
+          const Vec3 q_M = piece.p_M + piece.R_M * piece.mesh->vertex(v);
+          bool held_vertex = false;
+          for (const Vec3& f : link.mover_feature_M) {
+            held_vertex = held_vertex || (f - q_M).norm() <= tol;
+          }
+          if (held_vertex) continue;
+          const Vec3 q = origin + R * piece.mesh->vertex(v);
+          lowest = std::min(lowest, c.n_W.dot(q - plane));
+        }
       }
       // The threshold is set at each step's start: half the feature's height (at least a
       // quarter envelope), or half the lowest other vertex's height if that is lower: a vertex

@@ -52,6 +52,14 @@ struct HeldLink {
   Vec3 point_S = Vec3::Zero();    // a point of the plane
   Vec3 t1_S = Vec3::UnitX();      // a tangent fixed in the support: slip directions refer to it
   double gap = 0.0;               // the gap held [m] (the mover's feature above the plane)
+  // The mover touches the plane with a point of a curved surface (an ellipsoid, a cylinder's
+  // rim, a capsule's end, a loaded ball): found afresh at every state as the support point of
+  // this smooth shape (the mover's piece, posed at piece_p_M, piece_R_M in its frame) against the
+  // plane's normal; mover_feature_M is empty, sphere_radius 0. The shape is the body's geometry,
+  // which outlives the link.
+  const Shape* curved_shape = nullptr;
+  Vec3 piece_p_M = Vec3::Zero();
+  Mat3 piece_R_M = Mat3::Identity();
   // Neither side offers a plane (two spheres, a sphere or a vertex on an edge, an edge across an
   // edge): a point contact along the line between the two features' closest points. The
   // support's feature is then in support_face_S (1 point, or 2 for an edge; empty for a sphere of
@@ -78,10 +86,10 @@ struct LinkSide {
 // face or a halfspace facing the other body), and the other's contact feature; where neither side
 // offers a plane, the two features of a point contact. nullopt for two parallel edges without a
 // plane (held by neither rule: they stay collisions), and for a curved surface touching along a
-// point or a line (a smooth shape other than a cylinder's flat cap, a loaded ball): rolling moves
-// that contact over the surface, which material points cannot follow, so it stays a train of
-// microcollisions — except a cylinder's or capsule's side lying on a plane, held like a sphere
-// about its axis (sphere_radius).
+// point or a line against anything but a plane (a smooth shape other than a cylinder's flat cap,
+// a loaded ball): it stays a train of microcollisions. A curved point on a plane is held with
+// the point found afresh from the shape (curved_shape); a cylinder's or capsule's side lying on a
+// plane is held like a sphere about its axis (sphere_radius).
 std::optional<HeldLink> make_held_link(std::uint32_t pair, BodyId a, BodyId b,
                                        const LinkSide& side_a, const LinkSide& side_b,
                                        const DistanceResult& closest,

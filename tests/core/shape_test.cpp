@@ -338,3 +338,37 @@ TEST_CASE("Smooth shapes: exact support, radius and tight world box against brut
   CHECK(max_radius(Shape(make_cylinder(0.4, 0.3))) == Approx(0.5).epsilon(1e-15));
   CHECK(max_radius(Shape(make_loaded_ball(0.25, -0.07))) == Approx(0.32).epsilon(1e-15));
 }
+
+TEST_CASE("Smooth shapes: the support point's derivative matches a central difference") {
+  // The oracle: differences of the exact support point along random directions. The derivative
+  // is symmetric and annihilates the direction (the support function is homogeneous of degree 1).
+  std::mt19937_64 rng(1602);
+  const std::vector<Shape> shapes = {make_ellipsoid(Vec3(0.3, 0.5, 0.7)), make_cylinder(0.4, 0.05),
+                                     make_capsule(0.2, 0.35), make_loaded_ball(0.25, 0.07)};
+  for (std::size_t s = 0; s < shapes.size(); ++s) {
+    CAPTURE(s);
+    const Shape& shape = shapes[s];
+    for (int k = 0; k < 100; ++k) {
+      const Vec3 d = random_unit(rng);
+      const Mat3 H = smooth_support_derivative_M(shape, d);
+      CHECK((H - H.transpose()).norm() <= 1e-14 * (1.0 + H.norm()));
+      CHECK((H * d).norm() <= 1e-14 * (1.0 + H.norm()));
+      const double h = 1e-6;
+      for (int j = 0; j < 3; ++j) {
+        const Vec3 e = Vec3::Unit(j);
+        const Vec3 fd =
+            (smooth_support_M(shape, d + h * e) - smooth_support_M(shape, d - h * e)) / (2.0 * h);
+        CHECK((H * e - fd).norm() <= 1e-6 * (1.0 + H.norm()));
+      }
+    }
+  }
+  // A cylinder's cap or side direction has no unique smooth support point: zero.
+  const Shape cylinder = make_cylinder(0.4, 0.05);
+  CHECK(smooth_support_derivative_M(cylinder, Vec3::UnitZ()).norm() == 0.0);
+  CHECK(smooth_support_derivative_M(cylinder, Vec3::UnitX()).norm() == 0.0);
+  // On a rim: rank one, r / |d_xy| along the rim's tangent.
+  const Vec3 d = Vec3(0.6, 0.0, -0.8);
+  const Mat3 H = smooth_support_derivative_M(cylinder, d);
+  CHECK(H(1, 1) == Approx(0.4 / 0.6).epsilon(1e-15));
+  CHECK(H.norm() == Approx(0.4 / 0.6).epsilon(1e-15));
+}

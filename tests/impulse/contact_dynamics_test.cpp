@@ -405,3 +405,85 @@ TEST_CASE("held: a pyramid of boxes at rest is held by forces that meet every in
     CHECK(worst_violation(repeated, again, 1e-9).kind == HeldViolation::Kind::kNone);
   }
 }
+
+TEST_CASE("held: a ball held as a curved surface moves exactly as the held sphere",
+          "[impulse][held]") {
+  // The same ball twice: as a sphere (contact point under its centre, sphere_radius) and as a
+  // smooth surface touching at a material point that moves over it (curved, H = R (I - n n^T)).
+  // The two descriptions of one contact must give one motion, rolling on a platter and sliding.
+  const double R = 0.05, Omega = 2 * kPi;
+  const Vec3 n = Vec3::UnitZ();
+  for (const bool sliding : {false, true}) {
+    CAPTURE(sliding);
+    const Vec3 x(0.3, 0.1, R), v(0.05, 0.1, 0);
+    const Vec3 W(0, 0, Omega);
+    const Vec3 w = sliding ? Vec3(3.0, -1.0, 7.0) : Vec3(-n.cross(W.cross(x - R * n) - v) / R);
+    std::vector<HeldBody> bodies = {ball(0.1, R, x, v, w)};
+    HeldContact k = on_plane(0, Vec3(x.x(), x.y(), 0), n, Vec3::UnitX(), 0.5);
+    k.support_known.w_W = W;
+    HeldContact sphere = k, curved = k;
+    sphere.sphere_radius = R;
+    curved.curved = true;
+    curved.curvature_W = R * (Mat3::Identity() - n * n.transpose());
+    curved.curved_size = R;
+    std::vector<HeldContact> a = {sphere}, b = {curved};
+    const HeldModes ma = choose_held_modes(bodies, a, 1e-12, 1e-12);
+    const HeldModes mb = choose_held_modes(bodies, b, 1e-12, 1e-12);
+    REQUIRE(ma.solution.status == HeldStatus::kOk);
+    REQUIRE(mb.solution.status == HeldStatus::kOk);
+    CHECK(a[0].sticks == !sliding);
+    CHECK(b[0].sticks == a[0].sticks);
+    CHECK((ma.solution.a_W[0] - mb.solution.a_W[0]).norm() <= 1e-13);
+    CHECK((ma.solution.alpha_W[0] - mb.solution.alpha_W[0]).norm() <= 1e-11);
+    CHECK(std::abs(ma.solution.forces[0].normal - mb.solution.forces[0].normal) <= 1e-14);
+    CHECK((ma.solution.motion[0].slip_rate_W - mb.solution.motion[0].slip_rate_W).norm() <= 1e-12);
+  }
+}
+
+TEST_CASE("held: Euler's disk rolling on its rim at its steady motion keeps it",
+          "[impulse][held]") {
+  // A cylinder (radius r, half-height h) tilted alpha, centre of mass at rest, rolling without
+  // slipping on its lower rim, its axis precessing at Omega with Omega^2 = g D / (sin alpha
+  // [r D / 2 - (r^2/4 - h^2/3) cos alpha]), D = r cos alpha - h sin alpha, and spinning at
+  // -Omega D / r about its axis: the steady motion (Moffatt, Nature 2000, for the thin disk). Held
+  // at its rim point - a curved contact, the rim's tangent its only curvature, r / sin alpha - the
+  // centre of mass must stay at rest (a = 0, no friction force) and the angular velocity precess
+  // with the axis, dw/dt = Omega z x w. Without the rim point's motion over the rim the normal
+  // force and the turning come out wrong.
+  const double r = 0.0375, h = 0.005, m = 0.45;
+  for (const double alpha_deg : {5.0, 20.0, 60.0}) {
+    CAPTURE(alpha_deg);
+    const double alpha = alpha_deg * kPi / 180.0;
+    const double D = r * std::cos(alpha) - h * std::sin(alpha);
+    const double Omega = std::sqrt(
+        kG * D / (std::sin(alpha) * (r * D / 2 - (r * r / 4 - h * h / 3) * std::cos(alpha))));
+    const double spin = -Omega * D / r;
+    const Vec3 axis(std::sin(alpha), 0, std::cos(alpha));
+    const Mat3 rot = Eigen::AngleAxisd(alpha, Vec3::UnitY()).toRotationMatrix();
+    const double I1 = m * (3 * r * r + 4 * h * h) / 12, I3 = m * r * r / 2;
+    HeldBody disk;
+    disk.mass = m;
+    disk.inertia_W = rot * Vec3(I1, I1, I3).asDiagonal() * rot.transpose();
+    disk.inv_inertia_W = disk.inertia_W.inverse();
+    disk.x_W = Vec3(0, 0, r * std::sin(alpha) + h * std::cos(alpha));
+    disk.w_W = spin * axis + Vec3(0, 0, Omega);
+    disk.force_W = Vec3(0, 0, -kG * m);
+    const Vec3 c = disk.x_W - h * axis + r * Vec3(std::cos(alpha), 0, -std::sin(alpha));
+    REQUIRE(std::abs(c.z()) < 1e-16);
+    HeldContact k = on_plane(0, c, Vec3::UnitZ(), Vec3::UnitX(), 0.3);
+    k.curved = true;
+    k.curvature_W = r / std::sin(alpha) * Vec3::UnitY() * Vec3::UnitY().transpose();
+    k.curved_size = r;
+    std::vector<HeldBody> bodies = {disk};
+    std::vector<HeldContact> contacts = {k};
+    REQUIRE(held_velocities(bodies, contacts)[0].slip_W.norm() < 1e-15);
+    const HeldModes modes = choose_held_modes(bodies, contacts, 1e-12, 1e-12);
+    REQUIRE(modes.solution.status == HeldStatus::kOk);
+    CHECK(contacts[0].sticks);
+    const double scale = Omega * disk.w_W.norm();
+    CHECK(modes.solution.a_W[0].norm() <= 1e-12 * kG);
+    CHECK((modes.solution.alpha_W[0] - Vec3(0, 0, Omega).cross(disk.w_W)).norm() <= 1e-12 * scale);
+    CHECK(modes.solution.forces[0].normal == Approx(m * kG).epsilon(1e-12));
+    CHECK(modes.solution.forces[0].friction.norm() <= 1e-12 * m * kG);
+  }
+}
