@@ -8,7 +8,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
+#include <optional>
 
 namespace palpable {
 
@@ -866,17 +868,76 @@ HeldModes choose_held_modes(const std::vector<HeldBody>& bodies, std::vector<Hel
         // Slip starts against the friction sticking needed; then the direction is refined until
         // the sliding acceleration points along it (a fixed point: the unique direction).
         c.sticks = false;
-        Vec2 dir = -f.friction.normalized();
-        for (int iteration = 0; iteration < 50; ++iteration) {
-          c.slip_dir = dir;
+        const Vec2 start = -f.friction.normalized();
+        const std::size_t ci = static_cast<std::size_t>(v.contact);
+        auto rate_along = [&](const Vec2& d, Vec2& rate) {
+          c.slip_dir = d;
           const HeldSolution trial = solve_held(bodies, contacts);
-          if (trial.status != HeldStatus::kOk) break;
-          const Vec2 rate =
-              plane_coords(c, trial.motion[static_cast<std::size_t>(v.contact)].slip_rate_W);
-          if (!(rate.norm() > 0.0)) break;
+          if (trial.status != HeldStatus::kOk) return false;
+          rate = plane_coords(c, trial.motion[ci].slip_rate_W);
+          return true;
+        };
+        Vec2 dir = start;
+        bool converged = false;
+        for (int iteration = 0; iteration < 50; ++iteration) {
+          Vec2 rate;
+          if (!rate_along(dir, rate) || !(rate.norm() > 0.0)) {
+            converged = true;  // (as before: nothing better to go on)
+            break;
+          }
           const Vec2 next = rate.normalized();
-          if (next.dot(dir) > 1.0 - 1e-15) break;
+          if (next.dot(dir) > 1.0 - 1e-15) {
+            converged = true;
+            break;
+          }
           dir = next;
+        }
+        if (!converged) {
+          // The iteration can cycle instead (seen on curved contacts: the direction flipped
+          // between two mirror images 50 times, and the slide it chose stopped 1e-7 s later, over
+          // and over). Then the fixed point is found as a root of the slip rate's component across
+          // the direction, cross(d, rate(d)), over the circle of directions: scanned in 72 steps
+          // from the first guess, bisected, and the first root met where the slip grows along it
+          // is kept.
+          constexpr int kSteps = 72;
+          const double theta0 = std::atan2(start.y(), start.x());
+          auto at = [&](double theta) { return Vec2(std::cos(theta), std::sin(theta)); };
+          auto across = [&](double theta, double& along) {
+            Vec2 rate;
+            if (!rate_along(at(theta), rate)) return std::numeric_limits<double>::quiet_NaN();
+            along = at(theta).dot(rate);
+            return at(theta).x() * rate.y() - at(theta).y() * rate.x();
+          };
+          double unused_along = 0.0;
+          double previous = across(theta0, unused_along);
+          std::optional<double> best;
+          for (int k = 1; k <= kSteps && !best; ++k) {
+            const double lo_theta = theta0 + 2.0 * M_PI * (k - 1) / kSteps;
+            const double hi_theta = theta0 + 2.0 * M_PI * k / kSteps;
+            double along = 0.0;
+            const double value = across(hi_theta, along);
+            if (std::isfinite(previous) && std::isfinite(value) &&
+                (previous < 0.0) != (value < 0.0)) {
+              double lo = lo_theta, hi = hi_theta, f_lo = previous;
+              for (int it = 0; it < 60; ++it) {
+                const double mid = 0.5 * (lo + hi);
+                double unused = 0.0;
+                const double f_mid = across(mid, unused);
+                if (!std::isfinite(f_mid)) break;
+                if ((f_mid < 0.0) == (f_lo < 0.0)) {
+                  lo = mid;
+                  f_lo = f_mid;
+                } else {
+                  hi = mid;
+                }
+              }
+              double root_along = 0.0;
+              across(0.5 * (lo + hi), root_along);
+              if (root_along > 0.0) best = 0.5 * (lo + hi);
+            }
+            previous = value;
+          }
+          dir = best ? at(*best) : start;
         }
         c.slip_dir = dir;
         break;

@@ -576,7 +576,13 @@ TEST_CASE("smooth shapes dropped tilted and spinning behave under both contact m
     CHECK(run.stats.distance_failures == 0);
     CHECK(run.stats.impulse_failures == 0);
     CHECK(run.stats.retry_limit_hits == 0);
-    CHECK(run.stats.collisions + run.stats.microcollisions > 100);
+    // Under microcollisions contact is trains of collisions; under the persistent model each
+    // body's curved point (or, once it lands flat, its face or side) is held.
+    if (model == ContactModel::kMicrocollisions) {
+      CHECK(run.stats.collisions + run.stats.microcollisions > 100);
+    } else {
+      CHECK(run.stats.holds >= 4);
+    }
     const double v_micro = std::sqrt(2.0 * g * world.settings.envelope_m);
     double total_mass = 0.0;
     for (std::size_t i = 1; i < world.bodies.size(); ++i) total_mass += world.bodies[i].mass.mass;

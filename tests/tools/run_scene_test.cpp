@@ -353,7 +353,7 @@ TEST_CASE("persistent model: a hand-spun tippe top turns over inside its band on
 TEST_CASE("persistent model: the rattleback reverses spun one way and not the other",
           "[tools][run][scene][smooth][persistent]") {
   // scenarios/rattleback.json under the persistent model (the ellipsoid's lowest point held, 10
-  // s): spun at -5 rad/s its vertical spin changes sign (measured at 4.25 s); at +5 it keeps its
+  // s): spun at -5 rad/s its vertical spin changes sign (measured at 4.45 s); at +5 it keeps its
   // sense (+5.01 at the end); from pitching alone it spins up in the + sense (+0.36 rad/s).
   for (const char* spin : {"5", "-5", "0"}) {
     CAPTURE(spin);
