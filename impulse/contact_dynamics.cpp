@@ -2,6 +2,8 @@
 
 #include "impulse/contact_torque.hpp"
 
+#include "core/convex_polygon.hpp"
+
 #include <glpk.h>
 #include <Eigen/Dense>
 #include <Eigen/QR>
@@ -790,6 +792,66 @@ int closing_released(const std::vector<HeldContact>& contacts, const HeldModes& 
   return closing;
 }
 
+// The direction a sticking contact beyond its cone starts to slide in: the one along which its
+// sliding acceleration points (a fixed point: the unique direction), from `start`, the opposite
+// of the friction sticking needed. Iterated d <- rate(d) / |rate(d)|; where that cycles instead
+// (seen on curved contacts: the direction flipped between two mirror images 50 times, and the
+// slide it chose stopped 1e-7 s later, over and over), found as a root of the slip rate's
+// component across the direction, cross(d, rate(d)), over the circle of directions: scanned in
+// 72 steps from `start`, bisected, and the first root met where the slip grows along it kept.
+// Leaves contacts[i] sliding along the direction tried last.
+Vec2 unstable_stick_direction(const std::vector<HeldBody>& bodies,
+                              std::vector<HeldContact>& contacts, std::size_t i,
+                              const Vec2& start) {
+  HeldContact& c = contacts[i];
+  // The slip rate sliding along d, in (along d, across d); nullopt if the problem fails.
+  auto rate_along = [&](const Vec2& d) -> std::optional<Vec2> {
+    c.slip_dir = d;
+    const HeldSolution trial = solve_held(bodies, contacts);
+    if (trial.status != HeldStatus::kOk) return std::nullopt;
+    return plane_coords(c, trial.motion[i].slip_rate_W);
+  };
+  Vec2 dir = start;
+  for (int iteration = 0; iteration < 50; ++iteration) {
+    const std::optional<Vec2> rate = rate_along(dir);
+    if (!rate || !(rate->norm() > 0.0)) return dir;  // nothing better to go on
+    const Vec2 next = rate->normalized();
+    if (next.dot(dir) > 1.0 - 1e-15) return dir;
+    dir = next;
+  }
+  constexpr int kSteps = 72;
+  const double theta0 = std::atan2(start.y(), start.x());
+  auto at = [](double theta) { return Vec2(std::cos(theta), std::sin(theta)); };
+  auto across = [&](double theta) {
+    const std::optional<Vec2> rate = rate_along(at(theta));
+    return rate ? cross2(at(theta), *rate) : std::numeric_limits<double>::quiet_NaN();
+  };
+  double previous = across(theta0);
+  for (int k = 1; k <= kSteps; ++k) {
+    double lo = theta0 + 2.0 * M_PI * (k - 1) / kSteps, hi = theta0 + 2.0 * M_PI * k / kSteps;
+    const double value = across(hi);
+    if (std::isfinite(previous) && std::isfinite(value) && (previous < 0.0) != (value < 0.0)) {
+      double f_lo = previous;
+      for (int it = 0; it < 60; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        const double f_mid = across(mid);
+        if (!std::isfinite(f_mid)) break;
+        if ((f_mid < 0.0) == (f_lo < 0.0)) {
+          lo = mid;
+          f_lo = f_mid;
+        } else {
+          hi = mid;
+        }
+      }
+      const double root = 0.5 * (lo + hi);
+      const std::optional<Vec2> rate = rate_along(at(root));
+      if (rate && at(root).dot(*rate) > 0.0) return at(root);
+    }
+    previous = value;
+  }
+  return start;
+}
+
 }  // namespace
 
 HeldModes choose_held_modes(const std::vector<HeldBody>& bodies, std::vector<HeldContact>& contacts,
@@ -864,84 +926,11 @@ HeldModes choose_held_modes(const std::vector<HeldBody>& bodies, std::vector<Hel
         c.roll_sticks = false;
         c.roll_dir = -f.rolling.normalized();
         break;
-      case HeldViolation::Kind::kSlip: {
-        // Slip starts against the friction sticking needed; then the direction is refined until
-        // the sliding acceleration points along it (a fixed point: the unique direction).
+      case HeldViolation::Kind::kSlip:
         c.sticks = false;
-        const Vec2 start = -f.friction.normalized();
-        const std::size_t ci = static_cast<std::size_t>(v.contact);
-        auto rate_along = [&](const Vec2& d, Vec2& rate) {
-          c.slip_dir = d;
-          const HeldSolution trial = solve_held(bodies, contacts);
-          if (trial.status != HeldStatus::kOk) return false;
-          rate = plane_coords(c, trial.motion[ci].slip_rate_W);
-          return true;
-        };
-        Vec2 dir = start;
-        bool converged = false;
-        for (int iteration = 0; iteration < 50; ++iteration) {
-          Vec2 rate;
-          if (!rate_along(dir, rate) || !(rate.norm() > 0.0)) {
-            converged = true;  // (as before: nothing better to go on)
-            break;
-          }
-          const Vec2 next = rate.normalized();
-          if (next.dot(dir) > 1.0 - 1e-15) {
-            converged = true;
-            break;
-          }
-          dir = next;
-        }
-        if (!converged) {
-          // The iteration can cycle instead (seen on curved contacts: the direction flipped
-          // between two mirror images 50 times, and the slide it chose stopped 1e-7 s later, over
-          // and over). Then the fixed point is found as a root of the slip rate's component across
-          // the direction, cross(d, rate(d)), over the circle of directions: scanned in 72 steps
-          // from the first guess, bisected, and the first root met where the slip grows along it
-          // is kept.
-          constexpr int kSteps = 72;
-          const double theta0 = std::atan2(start.y(), start.x());
-          auto at = [&](double theta) { return Vec2(std::cos(theta), std::sin(theta)); };
-          auto across = [&](double theta, double& along) {
-            Vec2 rate;
-            if (!rate_along(at(theta), rate)) return std::numeric_limits<double>::quiet_NaN();
-            along = at(theta).dot(rate);
-            return at(theta).x() * rate.y() - at(theta).y() * rate.x();
-          };
-          double unused_along = 0.0;
-          double previous = across(theta0, unused_along);
-          std::optional<double> best;
-          for (int k = 1; k <= kSteps && !best; ++k) {
-            const double lo_theta = theta0 + 2.0 * M_PI * (k - 1) / kSteps;
-            const double hi_theta = theta0 + 2.0 * M_PI * k / kSteps;
-            double along = 0.0;
-            const double value = across(hi_theta, along);
-            if (std::isfinite(previous) && std::isfinite(value) &&
-                (previous < 0.0) != (value < 0.0)) {
-              double lo = lo_theta, hi = hi_theta, f_lo = previous;
-              for (int it = 0; it < 60; ++it) {
-                const double mid = 0.5 * (lo + hi);
-                double unused = 0.0;
-                const double f_mid = across(mid, unused);
-                if (!std::isfinite(f_mid)) break;
-                if ((f_mid < 0.0) == (f_lo < 0.0)) {
-                  lo = mid;
-                  f_lo = f_mid;
-                } else {
-                  hi = mid;
-                }
-              }
-              double root_along = 0.0;
-              across(0.5 * (lo + hi), root_along);
-              if (root_along > 0.0) best = 0.5 * (lo + hi);
-            }
-            previous = value;
-          }
-          dir = best ? at(*best) : start;
-        }
-        c.slip_dir = dir;
+        c.slip_dir = unstable_stick_direction(bodies, contacts, static_cast<std::size_t>(v.contact),
+                                              -f.friction.normalized());
         break;
-      }
     }
   }
 }

@@ -208,8 +208,7 @@ std::optional<HeldLink> make_held_link(std::uint32_t pair, BodyId a, BodyId b,
       round1 == 0.0 && curved_contact(side_a.geometry, closest.piece1, geometry.feature1);
   const bool curved2 =
       round2 == 0.0 && curved_contact(side_b.geometry, closest.piece2, geometry.feature2);
-  if ((curved1 && !plane2) || (curved2 && !plane1) || (round1 > 0.0 && !plane2) ||
-      (round2 > 0.0 && !plane1)) {
+  if (((curved1 || round1 > 0.0) && !plane2) || ((curved2 || round2 > 0.0) && !plane1)) {
     return std::nullopt;
   }
   if (!plane1 && !plane2) return point_pair_link(pair, a, b, side_a, side_b, closest, geometry);
@@ -1425,7 +1424,6 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
                                world.bodies[link.support.index].state, t, world.gravity_W, settings)
                      : world.bodies[link.support.index].state);
       const Vec3 plane = ss.x_W + rotation(ss) * link.point_S;
-      double lowest = kInfinity, feature_lowest = kInfinity;
       if (link.curved_shape) {
         // The other part's height above the touching point, from the direction d of -n in the
         // piece's frame: the rim's far side 2 r |d_xy|, the other rim 2 h |d_z|.
@@ -1442,28 +1440,27 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
         // It lands when it comes within half the held point's height (at least a quarter
         // envelope) of that point: the contact then turns into the cap's face or the side's line
         // (at the rise's zero the lowest point would jump to the other rim or end).
-        feature_lowest = c.n_W.dot(c.c_W - plane);
-        e[8].value = rise - 0.5 * std::max(feature_lowest, 0.5 * settings.envelope_m);
+        e[8].value = rise - 0.5 * std::max(c.n_W.dot(c.c_W - plane), 0.5 * settings.envelope_m);
         continue;
-      } else {
-        const ShapeGeometry::Piece& piece = g.pieces()[0];
-        const Mat3 R = rotation(sm) * piece.R_M;
-        const Vec3 origin = sm.x_W + rotation(sm) * piece.p_M;
-        const double tol = 1e-9 * size;
-        const Mat3 R_body = rotation(sm);
+      }
+      double lowest = kInfinity, feature_lowest = kInfinity;
+      const ShapeGeometry::Piece& piece = g.pieces()[0];
+      const Mat3 R = rotation(sm) * piece.R_M;
+      const Vec3 origin = sm.x_W + rotation(sm) * piece.p_M;
+      const double tol = 1e-9 * size;
+      const Mat3 R_body = rotation(sm);
+      for (const Vec3& f : link.mover_feature_M) {
+        feature_lowest = std::min(feature_lowest, c.n_W.dot(sm.x_W + R_body * f - plane));
+      }
+      for (int v = 0; v < piece.mesh->num_vertices(); ++v) {
+        const Vec3 q_M = piece.p_M + piece.R_M * piece.mesh->vertex(v);
+        bool held_vertex = false;
         for (const Vec3& f : link.mover_feature_M) {
-          feature_lowest = std::min(feature_lowest, c.n_W.dot(sm.x_W + R_body * f - plane));
+          held_vertex = held_vertex || (f - q_M).norm() <= tol;
         }
-        for (int v = 0; v < piece.mesh->num_vertices(); ++v) {
-          const Vec3 q_M = piece.p_M + piece.R_M * piece.mesh->vertex(v);
-          bool held_vertex = false;
-          for (const Vec3& f : link.mover_feature_M) {
-            held_vertex = held_vertex || (f - q_M).norm() <= tol;
-          }
-          if (held_vertex) continue;
-          const Vec3 q = origin + R * piece.mesh->vertex(v);
-          lowest = std::min(lowest, c.n_W.dot(q - plane));
-        }
+        if (held_vertex) continue;
+        const Vec3 q = origin + R * piece.mesh->vertex(v);
+        lowest = std::min(lowest, c.n_W.dot(q - plane));
       }
       // The threshold is set at each step's start: half the feature's height (at least a
       // quarter envelope), or half the lowest other vertex's height if that is lower: a vertex
