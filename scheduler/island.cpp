@@ -192,12 +192,41 @@ double round_side_radius(const ShapeGeometry& g, int piece, const std::vector<Ve
   return 0.0;
 }
 
+// How far above a curved link's touching point the mover's next part lies, from the direction d
+// of -n in the piece's frame: for a cylinder on a rim, its rim's far side (2 r |d_xy|: it lands on
+// its cap) or its other rim (2 h |d_z|: on its side); for a capsule on one end, the other end
+// (2 h |d_z|). Infinite for shapes with nothing else that can touch (an ellipsoid, a ball).
+// `end`: the end held (HeldLink::curved_end); the other end's rise is negative where it lies
+// lower than the held one.
+double curved_rise(const Shape& shape, const Vec3& d, double end) {
+  const double along = end != 0.0 ? d.z() * end : std::abs(d.z());
+  if (const auto* cylinder = std::get_if<Cylinder>(&shape)) {
+    return 2.0 *
+           std::min(cylinder->half_height * along, cylinder->radius * std::hypot(d.x(), d.y()));
+  }
+  if (const auto* capsule = std::get_if<Capsule>(&shape)) return 2.0 * capsule->half_length * along;
+  return kInfinity;
+}
+
+// The direction d of -n in a curved link's piece frame, turned onto the end it holds (its sign
+// along z; +-1e-300 where it is zero, a body standing level).
+Vec3 held_direction(const HeldLink& link, Vec3 d) {
+  if (link.curved_end != 0.0) d.z() = link.curved_end * std::max(std::abs(d.z()), 1e-300);
+  return d;
+}
+
+// The rise below which that next part has landed: half the held point's height, at least a
+// quarter envelope (as for a polyhedron's other vertices).
+double landing_level(double held_height, double envelope) {
+  return 0.5 * std::max(held_height, 0.5 * envelope);
+}
+
 }  // namespace
 
 std::optional<HeldLink> make_held_link(std::uint32_t pair, BodyId a, BodyId b,
                                        const LinkSide& side_a, const LinkSide& side_b,
                                        const DistanceResult& closest,
-                                       const ContactGeometry& geometry) {
+                                       const ContactGeometry& geometry, double envelope) {
   const bool plane1 = geometry.unbounded1 || geometry.feature1.size() >= 3;
   const bool plane2 = geometry.unbounded2 || geometry.feature2.size() >= 3;
   // A round side on the other body's plane is held as a rounded segment; any other curved contact
@@ -281,12 +310,26 @@ std::optional<HeldLink> make_held_link(std::uint32_t pair, BodyId a, BodyId b,
     } else {
       return std::nullopt;
     }
+    // A rim already within the landing level of its cap or its other rim (a disk all but upright
+    // or flat) is not held as a point: it would land at once, be struck and held again, at one
+    // instant, without end (a disk started 0.1 degrees from upright did).
+    const Vec3 d = (R_M * link.piece_R_M).transpose() * -n_W;
+    if (std::holds_alternative<Cylinder>(*link.curved_shape) ||
+        std::holds_alternative<Capsule>(*link.curved_shape)) {
+      link.curved_end = d.z() >= 0.0 ? 1.0 : -1.0;
+    }
+    if (curved_rise(*link.curved_shape, d, link.curved_end) <= landing_level(link.gap, envelope)) {
+      return std::nullopt;
+    }
   } else if (round > 0.0) {
     // The core under the contact line: the piece's own axis (exact, material), not the query's
     // points (a closest-feature query places them only to its tolerance, and a core off the axis
     // would lift and drop the body as it rolls).
     link.sphere_radius = round;
     const ShapeGeometry::Piece& piece = *mover_piece;
+    link.side_shape = piece.smooth;
+    link.piece_p_M = piece.p_M;
+    link.piece_R_M = piece.R_M;
     double half = 0.0;
     if (const auto* cylinder = std::get_if<Cylinder>(piece.smooth)) half = cylinder->half_height;
     if (const auto* capsule = std::get_if<Capsule>(piece.smooth)) half = capsule->half_length;
@@ -401,7 +444,7 @@ bool place_link(const HeldLink& link, const BodyState& mover, const BodyState& s
   if (out.curved) {
     // The curved surface's lowest point against the plane, and how it moves over the surface.
     const Mat3 R = R_M * link.piece_R_M;
-    const Vec3 d = R.transpose() * -n;
+    const Vec3 d = held_direction(link, R.transpose() * -n);
     const Vec3 c = mover.x_W + R_M * link.piece_p_M + R * smooth_support_M(*link.curved_shape, d);
     feature.push_back(project(c));
     heights.push_back(n.dot(c - origin));
@@ -961,9 +1004,22 @@ Island::PlanResult Island::plan(World& world, const std::vector<const ShapeGeome
         if (!swap_roles(link, edge, sm, ss)) drop.push_back(static_cast<int>(i));
         again = true;
       } else if (link.sphere_radius > 0.0 && !link.mover_feature_M.empty()) {
-        // A rounded segment tipping about an end of its line (a cylinder half off a face): its
-        // contact would leave the side for the rim, which no link follows; it lets go.
-        drop.push_back(static_cast<int>(i));
+        // A rounded segment tipping about an end of its line (a disk stood on its side, a
+        // cylinder half off a face): its contact leaves the side for that end's rim (a capsule:
+        // its end cap), held as a curved point of it; without the piece, it lets go.
+        if (link.side_shape == nullptr) {
+          drop.push_back(static_cast<int>(i));
+        } else {
+          const Vec3 end_W = contact_points_W(c).front();
+          const Mat3 R = rotation(sm);
+          const Vec3 a = sm.x_W + R * link.mover_feature_M[0];
+          const Vec3 b = sm.x_W + R * link.mover_feature_M[1];
+          // mover_feature_M runs from the piece's -z end to its +z end.
+          link.curved_end = (end_W - a).squaredNorm() <= (end_W - b).squaredNorm() ? -1.0 : 1.0;
+          link.curved_shape = link.side_shape;
+          link.sphere_radius = 0.0;
+          link.mover_feature_M.clear();
+        }
         again = true;
       } else if (link.sphere_radius == 0.0) {
         // The reduced patch's points lie at the patch's mean height; the feature kept is the
@@ -1425,22 +1481,18 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
                      : world.bodies[link.support.index].state);
       const Vec3 plane = ss.x_W + rotation(ss) * link.point_S;
       if (link.curved_shape) {
-        // The other part's height above the touching point, from the direction d of -n in the
-        // piece's frame: the rim's far side 2 r |d_xy|, the other rim 2 h |d_z|.
         const Vec3 d = (rotation(sm) * link.piece_R_M).transpose() * -c.n_W;
-        double rise = kInfinity;
-        if (const auto* cylinder = std::get_if<Cylinder>(link.curved_shape)) {
-          rise = 2.0 * std::min(cylinder->half_height * std::abs(d.z()),
-                                cylinder->radius * std::hypot(d.x(), d.y()));
-        } else if (const auto* capsule = std::get_if<Capsule>(link.curved_shape)) {
-          rise = 2.0 * capsule->half_length * std::abs(d.z());
-        } else {
-          continue;
+        const double rise = curved_rise(*link.curved_shape, d, link.curved_end);
+        if (!std::isfinite(rise)) continue;
+        // It lands when it comes within the landing level of the touching point: the contact then
+        // turns into the cap's face or the side's line. Within that level already at the step's
+        // start (a side just tipped onto its rim), as soon as it goes down at all.
+        if (landing_threshold.size() <= i) landing_threshold.resize(i + 1, -kInfinity);
+        if (landing_threshold[i] == -kInfinity) {
+          const double level = landing_level(c.n_W.dot(c.c_W - plane), settings.envelope_m);
+          landing_threshold[i] = rise <= level ? rise - 1e-12 * size : level;
         }
-        // It lands when it comes within half the held point's height (at least a quarter
-        // envelope) of that point: the contact then turns into the cap's face or the side's line
-        // (at the rise's zero the lowest point would jump to the other rim or end).
-        e[8].value = rise - 0.5 * std::max(c.n_W.dot(c.c_W - plane), 0.5 * settings.envelope_m);
+        e[8].value = rise - landing_threshold[i];
         continue;
       }
       double lowest = kInfinity, feature_lowest = kInfinity;

@@ -60,6 +60,13 @@ struct HeldLink {
   const Shape* curved_shape = nullptr;
   Vec3 piece_p_M = Vec3::Zero();
   Mat3 piece_R_M = Mat3::Identity();
+  // A cylinder's or capsule's curved link: the end held, +1 or -1 along the piece's z (the rim or
+  // end cap the point lies on, kept even where the body stands level and rounding would pick the
+  // other); 0 for other shapes.
+  double curved_end = 0.0;
+  // A round side's piece (sphere_radius > 0 about its axis): where the line tips about one of its
+  // ends, the link goes on as a curved point of that end (curved_shape).
+  const Shape* side_shape = nullptr;
   // Neither side offers a plane (two spheres, a sphere or a vertex on an edge, an edge across an
   // edge): a point contact along the line between the two features' closest points. The
   // support's feature is then in support_face_S (1 point, or 2 for an edge; empty for a sphere of
@@ -89,11 +96,12 @@ struct LinkSide {
 // point or a line against anything but a plane (a smooth shape other than a cylinder's flat cap,
 // a loaded ball): it stays a train of microcollisions. A curved point on a plane is held with
 // the point found afresh from the shape (curved_shape); a cylinder's or capsule's side lying on a
-// plane is held like a sphere about its axis (sphere_radius).
+// plane is held like a sphere about its axis (sphere_radius). `envelope` [m]: a rim within the
+// landing level of its cap or its other rim is not held (see Island's landing events).
 std::optional<HeldLink> make_held_link(std::uint32_t pair, BodyId a, BodyId b,
                                        const LinkSide& side_a, const LinkSide& side_b,
                                        const DistanceResult& closest,
-                                       const ContactGeometry& geometry);
+                                       const ContactGeometry& geometry, double envelope);
 
 // The plane and the patch of a link at the given states, in the world: the reference point c (the
 // patch's centroid, on the mover's feature), the frame, and the patch (the mover's feature

@@ -55,7 +55,7 @@ std::optional<HeldLink> Simulation::Impl::link_of(std::uint32_t index,
       contact_geometry(pairs.geometry(p.a), Pose{ba.state.x_W, ba.state.q_WM}, pairs.geometry(p.b),
                        Pose{bb.state.x_W, bb.state.q_WM}, dr, settings().envelope_m);
   return make_held_link(index, p.a, p.b, LinkSide{ba, pairs.geometry(p.a), ba.state},
-                        LinkSide{bb, pairs.geometry(p.b), bb.state}, dr, g);
+                        LinkSide{bb, pairs.geometry(p.b), bb.state}, dr, g, settings().envelope_m);
 }
 
 void Simulation::Impl::after_collision(const CollisionRecord& record, double t) {
