@@ -10,6 +10,7 @@
 #include <catch2/catch.hpp>
 
 #include <cstdio>
+#include <string>
 
 using namespace palpable;
 using namespace palpable::test;
@@ -324,58 +325,81 @@ TEST_CASE("inside the target gap and receding: back down at the target gap, else
   // A block just lifted off by a microcollision: 3e-5 m above a fixed plane, target 5e-5 m,
   // rising at 0.04 m/s against gravity's 9.81 along the normal. It rises above the target and
   // the bound is when it comes back down to it; the gap never falls below 3e-5 before that.
-  ToiMotion block, ground;
-  block.v_W = Vec3(0.3, 0.0, 0.04);
-  block.a_W = kGravity;
-  DistanceResult closest;
-  closest.status = ContactStatus::kSeparated;
-  closest.distance = 3e-5;
-  closest.n_W = Vec3::UnitZ();  // from the ground (body 2) to the block (body 1)
-  Settings settings;
-  ToiBound bound = toi_bound(block, ground, closest, 5e-5, settings);
-  CHECK_FALSE(bound.floored);
-  auto gap = [](double t) { return 3e-5 + 0.04 * t - 0.5 * 9.81 * t * t; };
-  CHECK(gap(bound.dt) == Approx(5e-5).epsilon(1e-9));
-  CHECK(bound.dt > 0.04 / 9.81);  // on the way down
-  for (int k = 1; k < 100; ++k) {
-    const double t = bound.dt * k / 100.0;
-    CHECK(gap(t) >= 3e-5);
+  // Receding, the bound is the same under both contact models; approaching, each has its rule.
+  for (const ContactModel model : {ContactModel::kMicrocollisions, ContactModel::kPersistent}) {
+    CAPTURE(std::string(to_string(model)));
+    ToiMotion block, ground;
+    block.v_W = Vec3(0.3, 0.0, 0.04);
+    block.a_W = kGravity;
+    DistanceResult closest;
+    closest.status = ContactStatus::kSeparated;
+    closest.distance = 3e-5;
+    closest.n_W = Vec3::UnitZ();  // from the ground (body 2) to the block (body 1)
+    Settings settings;
+    settings.contact_model = model;
+    ToiBound bound = toi_bound(block, ground, closest, 5e-5, settings);
+    CHECK_FALSE(bound.floored);
+    auto gap = [](double t) { return 3e-5 + 0.04 * t - 0.5 * 9.81 * t * t; };
+    CHECK(gap(bound.dt) == Approx(5e-5).epsilon(1e-9));
+    CHECK(bound.dt > 0.04 / 9.81);  // on the way down
+    for (int k = 1; k < 100; ++k) {
+      const double t = bound.dt * k / 100.0;
+      CHECK(gap(t) >= 3e-5);
+    }
+    // Rising too slowly to reach the target (peak 3e-5 + 1e-4^2 / 19.62 < 5e-5): back at the
+    // present gap, t = -2b/a.
+    block.v_W.z() = 1e-4;
+    CHECK(toi_bound(block, ground, closest, 5e-5, settings).dt ==
+          Approx(2.0 * 1e-4 / 9.81).epsilon(1e-14));
+    block.v_W.z() = 0.04;
+    // Receding without a closing acceleration: never again.
+    block.a_W = Vec3::Zero();
+    CHECK(toi_bound(block, ground, closest, 5e-5, settings).dt == kInfinity);
+    block.v_W.z() = -0.04;
+    if (model == ContactModel::kMicrocollisions) {
+      // Approaching inside the target gap, the microcollision model's rule: now.
+      CHECK(toi_bound(block, ground, closest, 5e-5, settings).dt == settings.toi_min_progress_s);
+    } else {
+      // The persistent model's: when half the present gap has closed, 1.5e-5 / 0.04 s.
+      bound = toi_bound(block, ground, closest, 5e-5, settings);
+      CHECK_FALSE(bound.floored);
+      CHECK(bound.dt == Approx(0.5 * 3e-5 / 0.04).epsilon(1e-12));
+    }
   }
-  // Rising too slowly to reach the target (peak 3e-5 + 1e-4^2 / 19.62 < 5e-5): back at the
-  // present gap, t = -2b/a.
-  block.v_W.z() = 1e-4;
-  CHECK(toi_bound(block, ground, closest, 5e-5, settings).dt ==
-        Approx(2.0 * 1e-4 / 9.81).epsilon(1e-14));
-  block.v_W.z() = 0.04;
-  // Receding without a closing acceleration: never again.
-  block.a_W = Vec3::Zero();
-  CHECK(toi_bound(block, ground, closest, 5e-5, settings).dt == kInfinity);
-  // Approaching inside the target gap: now.
-  block.v_W.z() = -0.04;
-  CHECK(toi_bound(block, ground, closest, 5e-5, settings).dt == settings.toi_min_progress_s);
 }
 
 TEST_CASE("the progress floor never carries a pair through contact", "[distance][toi]") {
   // A box face closing on a fixed plane at 1e4 m/s: the 1e-6 s floor alone would move it 1 cm,
   // a hundred envelopes. The floor is capped by the time the bound allows to close the whole
-  // present gap, inside the target gap too: no overlap.
-  ToiMotion box, ground;
-  box.v_W = Vec3(0.0, 0.0, -1e4);
-  DistanceResult closest;
-  closest.status = ContactStatus::kSeparated;
-  closest.n_W = Vec3::UnitZ();
-  Settings settings;
-  const double d_target = 5e-5;
-  closest.distance = 1e-3;  // the conservative bound is (1e-3 - 5e-5) / 1e4 = 9.5e-8 s
-  ToiBound bound = toi_bound(box, ground, closest, d_target, settings);
-  CHECK(bound.floored);
-  CHECK(bound.dt == Approx(1e-3 / 1e4).epsilon(1e-12));
-  closest.distance = 1e-5;  // inside the target gap, approaching: up to the plane, not past it
-  bound = toi_bound(box, ground, closest, d_target, settings);
-  CHECK(bound.floored);
-  CHECK(bound.dt == Approx(1e-5 / 1e4).epsilon(1e-12));
-  // Slow pairs keep the whole floor: at 1 m/s, 1e-6 s closes 1e-6 m < the 1e-5 m gap.
-  box.v_W.z() = -1.0;
-  bound = toi_bound(box, ground, closest, d_target, settings);
-  CHECK(bound.dt == settings.toi_min_progress_s);
+  // present gap, inside the target gap too: no overlap. So under both contact models.
+  for (const ContactModel model : {ContactModel::kMicrocollisions, ContactModel::kPersistent}) {
+    CAPTURE(std::string(to_string(model)));
+    ToiMotion box, ground;
+    box.v_W = Vec3(0.0, 0.0, -1e4);
+    DistanceResult closest;
+    closest.status = ContactStatus::kSeparated;
+    closest.n_W = Vec3::UnitZ();
+    Settings settings;
+    settings.contact_model = model;
+    const double d_target = 5e-5;
+    closest.distance = 1e-3;  // the conservative bound is (1e-3 - 5e-5) / 1e4 = 9.5e-8 s
+    ToiBound bound = toi_bound(box, ground, closest, d_target, settings);
+    CHECK(bound.floored);
+    CHECK(bound.dt == Approx(1e-3 / 1e4).epsilon(1e-12));
+    closest.distance = 1e-5;  // inside the target gap, approaching: up to the plane, not past it
+    bound = toi_bound(box, ground, closest, d_target, settings);
+    CHECK(bound.floored);
+    CHECK(bound.dt == Approx(1e-5 / 1e4).epsilon(1e-12));
+    box.v_W.z() = -1.0;
+    bound = toi_bound(box, ground, closest, d_target, settings);
+    if (model == ContactModel::kMicrocollisions) {
+      // Slow pairs keep the whole floor: at 1 m/s, 1e-6 s closes 1e-6 m < the 1e-5 m gap (the
+      // microcollision model's bound inside the target gap is now, raised to the floor).
+      CHECK(bound.dt == settings.toi_min_progress_s);
+    } else {
+      // The persistent model's bound there, half the present gap at 1 m/s, is above the floor.
+      CHECK_FALSE(bound.floored);
+      CHECK(bound.dt == Approx(0.5 * 1e-5 / 1.0).epsilon(1e-12));
+    }
+  }
 }

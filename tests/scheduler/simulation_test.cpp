@@ -185,8 +185,9 @@ TEST_CASE("bodies overlapping at the start are rejected naming them", "[schedule
 
 namespace {
 // A 48-sided prism lying on an edge (a line along its axis), sliding along that axis.
-World sliding_edge_world(bool centre_of_pressure) {
+World sliding_edge_world(bool centre_of_pressure, ContactModel model) {
   World world;
+  world.settings.contact_model = model;
   world.default_material = Material{0.4, 0.0};
   world.settings.centre_of_pressure = centre_of_pressure;
   world.add(fixed_ground());
@@ -207,24 +208,29 @@ World sliding_edge_world(bool centre_of_pressure) {
 
 TEST_CASE("a rod sliding on an edge stops at v0 / (mu g) without pitching", "[scheduler]") {
   const double v0 = 1.0, mu = 0.4, g = 9.81;
-  Simulation sim(sliding_edge_world(true), SimulationOptions{0.01});
-  Recorder rec;
-  sim.run_until(0.6, &rec);
-  const double stop_distance = v0 * v0 / (2 * mu * g);
-  const BodyState end = sim.state_at(BodyId{1}, 0.6);
-  INFO("final x " << end.x_W.x() << " expected " << stop_distance);
-  CHECK(end.x_W.x() == Approx(stop_distance).margin(1e-3));
-  CHECK(std::abs(end.x_W.y()) < 1e-9);
-  double max_pitch_rate = 0.0;
-  for (const auto& s : rec.samples) {
-    max_pitch_rate = std::max(max_pitch_rate, std::abs(s[1].w_W.y()));
+  for (const ContactModel model : {ContactModel::kMicrocollisions, ContactModel::kPersistent}) {
+    CAPTURE(std::string(to_string(model)));
+    Simulation sim(sliding_edge_world(true, model), SimulationOptions{0.01});
+    Recorder rec;
+    sim.run_until(0.6, &rec);
+    const double stop_distance = v0 * v0 / (2 * mu * g);
+    const BodyState end = sim.state_at(BodyId{1}, 0.6);
+    INFO("final x " << end.x_W.x() << " expected " << stop_distance);
+    CHECK(end.x_W.x() == Approx(stop_distance).margin(1e-3));
+    CHECK(std::abs(end.x_W.y()) < 1e-9);
+    double max_pitch_rate = 0.0;
+    for (const auto& s : rec.samples) {
+      max_pitch_rate = std::max(max_pitch_rate, std::abs(s[1].w_W.y()));
+    }
+    CHECK(max_pitch_rate < 1e-9);
+    CHECK(sim.stats().centre_of_pressure > 0);
   }
-  CHECK(max_pitch_rate < 1e-9);
-  CHECK(sim.stats().centre_of_pressure > 0);
 
   // Without the rule each collision sits at one point under the centre of mass, the friction
-  // impulse there pitches the rod, and it rocks from end to end.
-  Simulation rocking(sliding_edge_world(false), SimulationOptions{0.01});
+  // impulse there pitches the rod, and it rocks from end to end: the microcollision model's trains
+  // (held, the persistent model's edge does not rock either way), pinned.
+  Simulation rocking(sliding_edge_world(false, ContactModel::kMicrocollisions),
+                     SimulationOptions{0.01});
   Recorder rec2;
   rocking.run_until(0.6, &rec2);
   double max_pitch_rate_without = 0.0;
@@ -304,6 +310,8 @@ TEST_CASE("a tall block tipping forward while rocking back lands on its back edg
   // separates. The collision must go to the back edge, which lands first, instead of a zero
   // impulse at the front edge repeated at the same instant (a bowling pin hit while spinning).
   World world = tall_block_world(Vec3(3.0, 0, -0.02), Vec3(0, -1.4, 0));
+  // The microcollision model's centre-of-pressure rule: pinned, since the default may be the other.
+  world.settings.contact_model = ContactModel::kMicrocollisions;
   Simulation sim(world, SimulationOptions{});
   Recorder rec;
   sim.run_until(0.05, &rec);
@@ -337,6 +345,8 @@ TEST_CASE("a stack of three boxes, 1, 10 and 100 kg from the bottom, rests witho
   // (riders): the stack behaves as one resting body, about g / (2 v_micro) = 111 bounces a
   // second, instead of the light box passing the heavy ones' weight on in its own collisions.
   World world;
+  // Riders are the microcollision model's: pinned, since the default may be the other.
+  world.settings.contact_model = ContactModel::kMicrocollisions;
   world.default_material = Material{0.5, 0.3};
   world.add(fixed_ground());
   const double masses[] = {1.0, 10.0, 100.0};
@@ -465,6 +475,9 @@ TEST_CASE("a pin rocking on its base rim collides at the landing end, not the ri
   World world;
   world.default_material = Material{0.2, 0.3};  // pin-lane
   world.settings.envelope_m = 1e-3;
+  // A microcollision model's scene (v_micro, its centre-of-pressure rule): pinned, since the
+  // default may be the other.
+  world.settings.contact_model = ContactModel::kMicrocollisions;
   world.add(fixed_ground());
   Body pin = bowling_pin();
   pin.state.x_W = Vec3(21.157468708906698, 0.31410874578977271, 0.056713205671456643);

@@ -34,6 +34,9 @@ bool exists(const std::string& path) {
 TEST_CASE("decelerating block stops at t* and does not creep", "[tools][run][scene]") {
   RunOptions options;
   options.scene_path = scene("block_on_ramp_decelerating.json");
+  // The microcollision model's stop (creep measured at its contact points): pinned, since the
+  // default may be the other.
+  options.overrides = {"/settings/contact_model=microcollisions"};
   RunResult r = run_scene(options);
   const json& f = r.reference;
   INFO(f.dump(2));
@@ -49,7 +52,9 @@ TEST_CASE("decelerating block stops at t* and does not creep", "[tools][run][sce
 TEST_CASE("the reversal rule makes the stopped block creep", "[tools][run][scene]") {
   RunOptions options;
   options.scene_path = scene("block_on_ramp_decelerating.json");
-  options.overrides = {"/settings/microcollision_rule=reversal"};
+  // The rule is the microcollision model's: that model, pinned, since the default may be the other.
+  options.overrides = {"/settings/contact_model=microcollisions",
+                       "/settings/microcollision_rule=reversal"};
   RunResult r = run_scene(options);
   INFO(r.reference.dump(2));
   // Mirtich's rule settles into a stick-each-bounce cycle that slides a_t tau / 2 on average
@@ -70,6 +75,9 @@ TEST_CASE("ball on platter orbits at 2 Omega / 7 on the closed-form circle",
           "[tools][run][scene]") {
   RunOptions options;
   options.scene_path = scene("ball_on_platter.json");
+  // The microcollision model's orbit (its trains counted below): pinned, since the default may be
+  // the other.
+  options.overrides = {"/settings/contact_model=microcollisions"};
   RunResult r = run_scene(options);
   INFO(r.reference.dump(2));
   CHECK(std::abs(r.reference["rate_rel_error"].get<double>()) <= 1e-3);
@@ -87,7 +95,10 @@ TEST_CASE("sphere launched without spin rolls from 2 v0 / (7 mu g) at 5 v0 / 7",
     CAPTURE(envelope);
     RunOptions options;
     options.scene_path = scene("sphere_slide_to_roll.json");
-    options.overrides = {std::string("/settings/envelope=") + envelope};
+    // The microcollision model's error, proportional to the envelope: pinned, since the default
+    // may be the other.
+    options.overrides = {"/settings/contact_model=microcollisions",
+                         std::string("/settings/envelope=") + envelope};
     RunResult r = run_scene(options);
     const json& f = r.reference;
     INFO(f.dump(2));
@@ -156,8 +167,9 @@ TEST_CASE("a cylinder rolls down 10 degrees at g sin(theta) / 1.5, exactly when 
       CHECK(std::abs(n.dot(s.x_W - start.x_W)) <= 1e-12 * (s.x_W - start.x_W).norm());
     }
     CHECK(std::abs(fitted_acceleration(held) - c.a) <= 1e-9 * c.a);
-    // The default model, for comparison: the same motion, blurred by its microcollisions.
-    options.overrides = {std::string("/parameters/mu=") + c.mu};
+    // The microcollision model, for comparison: the same motion, blurred by its microcollisions.
+    options.overrides = {"/settings/contact_model=microcollisions",
+                         std::string("/parameters/mu=") + c.mu};
     const RunResult trains = run_scene(options);
     CHECK(trains.stats.microcollisions > 50);
     CHECK(std::abs(fitted_acceleration(trains) - c.a) <= 1e-3 * c.a);
@@ -250,7 +262,10 @@ TEST_CASE("the tippe top turns over inside its inertia band and stays upright ou
     CAPTURE(band);
     RunOptions options;
     options.scene_path = scene("tippe_top.json");
-    if (!band) options.overrides = {"/bodies/1/inertia=[2.7e-6,2.7e-6,3.6e-6]"};
+    // The microcollision model's run of the shipped start (the persistent model's is tested
+    // below): pinned, since the default may be the other.
+    options.overrides = {"/settings/contact_model=microcollisions"};
+    if (!band) options.overrides.push_back("/bodies/1/inertia=[2.7e-6,2.7e-6,3.6e-6]");
     const RunResult r = run_scene(options);
     CHECK(r.stats.penetrations == 0);
     check_tippe_top_after_3s(r, band, 5e-4);
@@ -472,7 +487,9 @@ TEST_CASE("numerical trouble warns, and with --strict fails leaving no file", "[
   // into the table: the overlap is the second trouble reported.
   RunOptions options;
   options.scene_path = scene("coins.json");
-  options.overrides = {"/settings/retry_limit=1"};
+  // The microcollision model's run: pinned, since the default may be the other (held, the coins'
+  // skipped pairs leave no overlap).
+  options.overrides = {"/settings/contact_model=microcollisions", "/settings/retry_limit=1"};
   options.trace_path = "run_scene_test_strict.csv";
   const RunResult r = run_scene(options);
   REQUIRE(r.stats.retry_limit_hits > 0);
@@ -490,7 +507,7 @@ TEST_CASE("numerical trouble warns, and with --strict fails leaving no file", "[
   CHECK_FALSE(exists(options.trace_path));
 
   // A clean run has none, and --strict changes nothing.
-  options.overrides.clear();
+  options.overrides = {"/settings/contact_model=microcollisions"};
   CHECK(palpable::tools::numerical_trouble(run_scene(options).stats).empty());
   CHECK(exists(options.trace_path));
   std::remove(options.trace_path.c_str());
@@ -518,30 +535,39 @@ TEST_CASE("a trace too short for its reference is run and says the comparison is
 TEST_CASE("a scene's reference follows --set: its closed form is the new scene's",
           "[tools][run][reference]") {
   // The decelerating ramp's reference gives only its body and support: friction, angle, normal
-  // and launch speed come from the scene, so overriding them changes the closed form.
+  // and launch speed come from the scene, so overriding them changes the closed form. So under
+  // either contact model.
   const double g = 9.81, theta = 30.0 * 3.14159265358979323846 / 180.0;
-  RunOptions options;
-  options.scene_path = scene("block_on_ramp_decelerating.json");
-  options.overrides = {"/materials/pairs/0/friction=0.8",
-                       "/bodies/1/velocity=[0.8660254037844386, 0, -0.5]"};
-  const RunResult r = run_scene(options);
-  const double a = g * (std::sin(theta) - 0.8 * std::cos(theta));
-  CHECK(r.reference["acceleration_closed_form"].get<double>() == Approx(a).epsilon(1e-12));
-  CHECK(r.reference["stop_time_closed_form_s"].get<double>() == Approx(1.0 / -a).epsilon(1e-12));
-  CHECK(r.scene.reference["friction"] == 0.8);
-  CHECK(r.scene.reference["initial_speed"].get<double>() == Approx(1.0).epsilon(1e-15));
-  CHECK(r.scene.reference["angle_deg"].get<double>() == Approx(30.0).epsilon(1e-12));
-  CHECK_FALSE(r.reference.contains("premise_failed"));
-  // Its figures are measured against that closed form (microcollisions: to about 1e-4 s).
-  CHECK(std::abs(r.reference["stop_time_error_s"].get<double>()) < 1e-3);
+  for (const std::string model : {"microcollisions", "persistent"}) {
+    CAPTURE(model);
+    RunOptions options;
+    options.scene_path = scene("block_on_ramp_decelerating.json");
+    options.overrides = {"/settings/contact_model=" + model, "/materials/pairs/0/friction=0.8",
+                         "/bodies/1/velocity=[0.8660254037844386, 0, -0.5]"};
+    const RunResult r = run_scene(options);
+    const double a = g * (std::sin(theta) - 0.8 * std::cos(theta));
+    CHECK(r.reference["acceleration_closed_form"].get<double>() == Approx(a).epsilon(1e-12));
+    CHECK(r.reference["stop_time_closed_form_s"].get<double>() == Approx(1.0 / -a).epsilon(1e-12));
+    CHECK(r.scene.reference["friction"] == 0.8);
+    CHECK(r.scene.reference["initial_speed"].get<double>() == Approx(1.0).epsilon(1e-15));
+    CHECK(r.scene.reference["angle_deg"].get<double>() == Approx(30.0).epsilon(1e-12));
+    CHECK_FALSE(r.reference.contains("premise_failed"));
+    // Its figures are measured against that closed form (microcollisions: to about 1e-4 s;
+    // held: to rounding).
+    CHECK(std::abs(r.reference["stop_time_error_s"].get<double>()) < 1e-3);
 
-  // mu = 0.6: the block decelerates at 0.196 m/s^2 and would stop at 10.2 s, after the run's
-  // 3 s — it slides off the ramp's end and falls. The stop figures are null, with the reason.
-  options.overrides = {"/materials/pairs/0/friction=0.6"};
-  const RunResult off = run_scene(options);
-  REQUIRE(off.reference.contains("premise_failed"));
-  CHECK(off.reference["stop_time_error_s"].is_null());
-  CHECK(off.reference["off_plane_max_m"].get<double>() > 0.02);  // off the end, falling
+    // mu = 0.6: the block decelerates at 0.196 m/s^2 and would stop at 10.2 s, after the run's
+    // 3 s — it slides off the ramp's end. The stop figures are null, with the reason.
+    options.overrides = {"/settings/contact_model=" + model, "/materials/pairs/0/friction=0.6"};
+    const RunResult off = run_scene(options);
+    REQUIRE(off.reference.contains("premise_failed"));
+    CHECK(off.reference["stop_time_error_s"].is_null());
+    if (model == "microcollisions") {
+      // The microcollision model's block is off the end and falling by 3 s (held, it has only
+      // begun to tip over the end: 2.4 mm off the plane, measured).
+      CHECK(off.reference["off_plane_max_m"].get<double>() > 0.02);
+    }
+  }
 }
 
 TEST_CASE("a trace says how it was made: a sidecar with version, scene hash, overrides, settings",
@@ -604,6 +630,9 @@ TEST_CASE("events say how each collision went: phases, slip before and after, no
           "[tools][run][events]") {
   RunOptions options;
   options.scene_path = scene("pool_break.json");
+  // The microcollision model's events: pinned, since the default may be the other (under the
+  // persistent model the balls placed touching the cloth add zero-impulse rows without phases).
+  options.overrides = {"/settings/contact_model=microcollisions"};
   options.end_time = 0.5;
   options.events_path = "run_scene_test_detail.csv";
   options.keep_events = true;
