@@ -1463,11 +1463,19 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
       // cylinder held on a rim, the rim's far side (it lands on its cap) or the other rim (on its
       // side); for a capsule held on one end, the other end. A sphere, an ellipsoid or a loaded
       // ball has nothing else that can touch.
+      // The mover may be outside the island (a fixed body's edge held on a dynamic face, after
+      // the roles turned round at its tipping): its other vertices land on that face all the
+      // same. (Unwatched, a box tipping over a fixed box's ridge turned into the fixed box's
+      // other face, 2 cm deep.)
       const int km = index_of(link.mover);
-      if (link.sphere_radius > 0.0 || km < 0 || link.point_pair) continue;
+      if (link.sphere_radius > 0.0 || link.point_pair) continue;
       const ShapeGeometry& g = *geometry[link.mover.index];
       if (!link.curved_shape && (g.pieces().size() != 1 || !g.pieces()[0].mesh)) continue;
-      const BodyState& sm = states[static_cast<std::size_t>(km)];
+      const Body& mover_body = world.bodies[link.mover.index];
+      const BodyState sm = km >= 0 ? states[static_cast<std::size_t>(km)]
+                                   : (t > mover_body.state.t ? advance(mover_body, mover_body.state,
+                                                                       t, world.gravity_W, settings)
+                                                             : mover_body.state);
       // Heights above the support's plane: another vertex lands when it comes down to half the
       // held feature's height (a vertex lower than the feature but rising, the other end of an
       // edge the body tips up from, has not landed; one at the feature's height must go down).
