@@ -294,6 +294,52 @@ TEST_CASE("group: under Stronge's law each contact returns e^2 of the work it ab
   }
 }
 
+// A cube (m) landing flat at u on a cube (M) that rests on a floor, the two contacts as one group
+// (the struck body's support taking part; issue 15's cube figure). Compression stops the top and
+// the floor takes the whole impulse m u. Poisson's expansion gives each contact e times its
+// compression impulse: the top leaves at e u, the base stays. Stronge's gives each contact e^2 of
+// the work its compression absorbed: the floor, at rest when struck, absorbed none and returns
+// none, so the landing returns e^2 m u^2 / 2 along the relative velocity p / m_red of the pair
+// alone (m_red = m M / (m + M)), p = e u sqrt(m m_red), and the base's push into the floor is
+// stopped plastically after: the top leaves at e u sqrt(M / (M + m)) (a third of the energy lost
+// at e = 1 for M = 2 m). Over the floor's four corners Poisson's answer is the same to 1e-9 (the
+// solver reports the singular share as unconverged); Stronge's per-point works there depend on
+// how the redundant corners share the impulse, which is why the scheduler gives such groups to
+// Poisson's law.
+TEST_CASE("group: a cube landing on a cube resting on a floor rebounds by each law's closed form",
+          "[group]") {
+  const double m = 1.0, M = 2.0, half = 0.05, u = 1.4;
+  for (const RestitutionLaw law : {RestitutionLaw::kPoisson, RestitutionLaw::kStronge}) {
+    for (int corners : {1, 4}) {
+      if (law == RestitutionLaw::kStronge && corners == 4) continue;
+      for (double e : {0.0, 0.5, 1.0}) {
+        CAPTURE(law == RestitutionLaw::kPoisson ? "poisson" : "stronge", corners, e);
+        const std::vector<GroupBody> bodies{fixed(), cube(M, half, Vec3(0, 0, half), Vec3::Zero()),
+                                            cube(m, half, Vec3(0, 0, 3 * half), Vec3(0, 0, -u))};
+        std::vector<GroupContact> contacts{{2, 1, Vec3(0, 0, 2 * half), Vec3::UnitZ(), 0.5, e}};
+        const std::vector<Vec3> floor =
+            corners == 1 ? std::vector<Vec3>{Vec3::Zero()}
+                         : std::vector<Vec3>{Vec3(half, half, 0), Vec3(-half, half, 0),
+                                             Vec3(-half, -half, 0), Vec3(half, -half, 0)};
+        for (const Vec3& q : floor) contacts.push_back({1, 0, q, Vec3::UnitZ(), 0.5, e});
+        GroupOptions options;
+        options.law = law;
+        const GroupResult r = resolve_group(bodies, contacts, options);
+        const double rebound =
+            law == RestitutionLaw::kPoisson ? e * u : e * u * std::sqrt(M / (M + m));
+        CHECK(r.v_W[2].z() == Approx(rebound).margin(1e-9));
+        CHECK(r.v_W[1].norm() <= 1e-9);
+        CHECK(r.w_W[1].norm() + r.w_W[2].norm() <= 1e-9);
+        double on_floor = 0.0;
+        for (std::size_t i = 1; i < contacts.size(); ++i) on_floor += r.impulse_W[i].z();
+        CHECK(r.impulse_W[0].z() == Approx(m * (u + rebound)).epsilon(1e-9));
+        CHECK(on_floor == Approx(r.impulse_W[0].z()).epsilon(1e-9));
+        CHECK(r.energy_after <= r.energy_before + 1e-12);
+      }
+    }
+  }
+}
+
 // More contacts than the body has freedoms (a patch's points, a singular Delassus operator), and
 // more than the 16 an enumeration of active sets could take: the last phase still leaves every
 // contact at its rebound floor or above, and the ones it pushes exactly at it.
