@@ -532,6 +532,16 @@ KnownMotion known_motion(const Body& b, const BodyState& s) {
 
 // The bodies' states at time t: island bodies from `states`, the others extrapolated.
 // `follow`: sliding contacts take the direction of their present relative motion (see below).
+// A body's state at t: its integrated state `states` if it is one of the island's, else its own
+// motion advanced to t (a fixed, kinematic or free body the island's links touch).
+BodyState body_state_at(const Island& island, const World& world,
+                        const std::vector<BodyState>& states, BodyId id, double t) {
+  const int k = island.index_of(id);
+  if (k >= 0) return states[static_cast<std::size_t>(k)];
+  const Body& b = world.bodies[id.index];
+  return t > b.state.t ? advance(b, b.state, t, world.gravity_W, world.settings) : b.state;
+}
+
 Problem build_problem(const Island& island, const World& world,
                       const std::vector<BodyState>& states, double t, bool follow = false,
                       double slip_floor = 0.0) {
@@ -549,12 +559,7 @@ Problem build_problem(const Island& island, const World& world,
     h.force_W = b.mass.mass * world.gravity_W;
     p.bodies.push_back(h);
   }
-  auto state_of = [&](BodyId id) -> BodyState {
-    const int k = island.index_of(id);
-    if (k >= 0) return states[static_cast<std::size_t>(k)];
-    const Body& b = world.bodies[id.index];
-    return t > b.state.t ? advance(b, b.state, t, world.gravity_W, world.settings) : b.state;
-  };
+  auto state_of = [&](BodyId id) { return body_state_at(island, world, states, id, t); };
   for (std::size_t i = 0; i < island.links.size(); ++i) {
     const HeldLink& link = island.links[i];
     const BodyState sm = state_of(link.mover);
@@ -1467,26 +1472,14 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
       // the roles turned round at its tipping): its other vertices land on that face all the
       // same. (Unwatched, a box tipping over a fixed box's ridge turned into the fixed box's
       // other face, 2 cm deep.)
-      const int km = index_of(link.mover);
       if (link.sphere_radius > 0.0 || link.point_pair) continue;
       const ShapeGeometry& g = *geometry[link.mover.index];
       if (!link.curved_shape && (g.pieces().size() != 1 || !g.pieces()[0].mesh)) continue;
-      const Body& mover_body = world.bodies[link.mover.index];
-      const BodyState sm = km >= 0 ? states[static_cast<std::size_t>(km)]
-                                   : (t > mover_body.state.t ? advance(mover_body, mover_body.state,
-                                                                       t, world.gravity_W, settings)
-                                                             : mover_body.state);
+      const BodyState sm = body_state_at(*this, world, states, link.mover, t);
       // Heights above the support's plane: another vertex lands when it comes down to half the
       // held feature's height (a vertex lower than the feature but rising, the other end of an
       // edge the body tips up from, has not landed; one at the feature's height must go down).
-      const int ks = index_of(link.support);
-      const BodyState ss =
-          ks >= 0
-              ? states[static_cast<std::size_t>(ks)]
-              : (t > world.bodies[link.support.index].state.t
-                     ? advance(world.bodies[link.support.index],
-                               world.bodies[link.support.index].state, t, world.gravity_W, settings)
-                     : world.bodies[link.support.index].state);
+      const BodyState ss = body_state_at(*this, world, states, link.support, t);
       const Vec3 plane = ss.x_W + rotation(ss) * link.point_S;
       if (link.curved_shape) {
         const Vec3 d = (rotation(sm) * link.piece_R_M).transpose() * -c.n_W;
