@@ -917,7 +917,19 @@ HeldModes choose_held_modes(const std::vector<HeldBody>& bodies, std::vector<Hel
         c.active = false;
         out.released.push_back(v.contact);
         break;
-      case HeldViolation::Kind::kTip: reduce_patch(c, v.edge); break;
+      case HeldViolation::Kind::kTip: {
+        reduce_patch(c, v.edge);
+        // Its reference point moved to the edge (or end): what slides is resisted against its slip
+        // there, as along the integrated motion (a spinning pin sliding on a facet of its hull,
+        // tipped about an end edge with the slip of the facet's centre, turned into the lane
+        // when integrated: it landed again every 4.7e-6 s).
+        if (!c.sticks) {
+          const Vec2 slip = plane_coords(
+              c, held_velocities(bodies, contacts)[static_cast<std::size_t>(v.contact)].slip_W);
+          if (slip.norm() > still) c.slip_dir = slip.normalized();
+        }
+        break;
+      }
       case HeldViolation::Kind::kSpin:
         c.spin_sticks = false;
         c.spin_sign = f.torsion > 0.0 ? -1.0 : 1.0;

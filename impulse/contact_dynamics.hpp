@@ -211,10 +211,11 @@ HeldViolation worst_violation(const std::vector<HeldContact>& contacts, const He
 // Chooses the modes (DESIGN.md §8.1): friction, torsion and rolling stick where their relative
 // motion is below `still` (m/s at the contact; rad/s times the patch size for turning), slide
 // otherwise; then, while the solution breaks a condition, the worst is mended - a contact that
-// must pull lets go (made inactive), a centre of pressure that leaves its patch makes
-// the patch its boundary (tipping: a polygon becomes the edge it crosses, a segment its end), a
-// sticking group beyond its bound slides in the direction its sliding acceleration points (the
-// same unique direction as the impulse integrator's unstable stick, at the acceleration level).
+// must pull lets go (made inactive), a centre of pressure that leaves its patch makes the patch
+// its boundary (tipping: a polygon becomes the edge it crosses, a segment its end; a sliding one
+// is then resisted against its slip there), a sticking group beyond its bound slides in the
+// direction its sliding acceleration points (the same unique direction as the impulse
+// integrator's unstable stick, at the acceleration level).
 // Returns the final solution; `changes` counts the mendings.
 struct HeldModes {
   HeldSolution solution;

@@ -154,6 +154,41 @@ TEST_CASE("held: a tall block sticking on a steep ramp tips about its lower edge
   CHECK(m.solution.forces[0].normal > 0.0);
 }
 
+TEST_CASE("held: a spinning block that tips while sliding slides against its slip at the edge",
+          "[impulse][held]") {
+  // A 0.2 x 0.6 x 1 m block sliding at 2 m/s along x and spinning at 10 rad/s about the
+  // vertical, mu = 1: friction at its base, 0.5 m below the centre, needs the pressure ~0.45 m
+  // ahead, outside the 0.1 m half-width: it tips about its front edge (x = +0.1). Over the face
+  // the slip turns with the spin: (2, 0) at its centre, (2, 1) at the front edge's middle. The
+  // contact kept is the edge, and its sliding is resisted against the slip there - what the
+  // integrated motion resists it against (scheduler/island.cpp, build_problem's `follow`), so the
+  // plan and the motion agree on which way the body turns.
+  std::vector<HeldBody> bodies = {
+      box(1.0, Vec3(0.1, 0.3, 0.5), Vec3(0, 0, 0.5), Vec3(2, 0, 0), Vec3(0, 0, 10))};
+  HeldContact k = on_plane(0, Vec3::Zero(), Vec3::UnitZ(), Vec3::UnitX(), 1.0);
+  k.patch = PatchKind::kPolygon;
+  k.polygon = {Vec2(-0.1, -0.3), Vec2(0.1, -0.3), Vec2(0.1, 0.3), Vec2(-0.1, 0.3)};
+  set_torsion_arm(k);
+  std::vector<HeldContact> contacts = {k};
+  const HeldModes m = choose_held_modes(bodies, contacts, 1e-12, 1e-12);
+  REQUIRE(m.solution.status == HeldStatus::kOk);
+  REQUIRE(contacts[0].patch == PatchKind::kSegment);
+  CHECK(contacts[0].c_W.x() == Approx(0.1).epsilon(1e-12));
+  REQUIRE_FALSE(contacts[0].sticks);
+  const Vec3 slip = held_velocities(bodies, contacts)[0].slip_W;
+  CHECK((slip - Vec3(2, 1, 0)).norm() < 1e-12);
+  const Vec2 along(slip.dot(contacts[0].t1_W), slip.dot(contacts[0].t2_W));
+  CHECK((contacts[0].slip_dir - along.normalized()).norm() < 1e-12);
+  // The friction opposes that slip, at its bound.
+  const HeldContactForces& f = m.solution.forces[0];
+  CHECK(f.friction.normalized().dot(-along.normalized()) == Approx(1.0).epsilon(1e-12));
+  CHECK(f.friction.norm() == Approx(f.normal).epsilon(1e-12));
+  // Tipping about the front edge: the back of the face lifts.
+  const Vec3 back = Vec3(-0.1, 0, 0) - bodies[0].x_W;
+  const Vec3 w = bodies[0].w_W;
+  CHECK((m.solution.a_W[0] + m.solution.alpha_W[0].cross(back) + w.cross(w.cross(back))).z() > 0.0);
+}
+
 TEST_CASE(
     "held: a sphere rolls down a slope at 5/7 g sin theta, sliding, its slip decays at "
     "7/2 mu g",
