@@ -956,6 +956,14 @@ Island::PlanResult Island::plan(World& world, const std::vector<const ShapeGeome
         }
         continue;
       }
+      if (!c.active || c.patch == PatchKind::kPoint) {
+        // A point has nothing to tip about: its patch vanished along the motion (a point pair's
+        // point left its edge), and re-planned as it is it vanishes again at once. It lets go;
+        // its pair's check finds what touches there now. (A ball held against a bowling pin's
+        // edge re-planned one ulp at a time, tens of thousands of times.)
+        remove_links({static_cast<int>(li)});
+        continue;
+      }
       // Else it reached the boundary of the mover's own feature: the body tips about the edge
       // (or end) nearest to the centre of pressure. (At the event the pressure is on that
       // boundary to the integration's accuracy: the choice of modes alone may not see it cross.)

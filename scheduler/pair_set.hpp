@@ -59,6 +59,12 @@ class PairSet {
     bool lifted = false;
     // Checks of an impact's approach to the instant of contact so far (Simulation, time_to_contact).
     std::uint8_t approach_steps = 0;
+    // How many of its collisions in a row followed a landing of its held contact (an island's
+    // event) and came down slower than a fall from the plane's resolution, without the pair
+    // separating beyond the envelope in between: a body held on a face that keeps tipping and
+    // landing back on it (Simulation, collide_or_hold's rounds).
+    std::uint8_t quiet_landings = 0;
+    bool landed = false;  // its held contact just landed: its next collision is that landing's
   };
 
   // One geometry per distinct shape (shapes are shared between bodies). Throws InputError

@@ -189,6 +189,10 @@ std::optional<CollisionRecord> Simulation::Impl::check_pair(std::uint32_t index,
   const DistanceResult& contact = contact_result(p, s1, s2, dr);
   if (contact.status == ContactStatus::kFailed ||
       (contact.status != ContactStatus::kPenetrating && contact.distance > settings().envelope_m)) {
+    if (contact.status != ContactStatus::kFailed) {  // apart: the next contact is a fresh one
+      p.quiet_landings = 0;
+      p.landed = false;
+    }
     schedule_pair(index, next_check_time(p, s1, s2, dr, t));
     return std::nullopt;
   }

@@ -236,7 +236,7 @@ std::optional<CollisionRecord> Simulation::Impl::collide_group(std::uint32_t ind
 
   // Each pair's round at this instant (collide_or_hold), before the records below stamp it.
   std::vector<int> rounds;
-  for (const Member& m : members) rounds.push_back(collision_round(pairs.pair(m.pair), t));
+  for (const Member& m : members) rounds.push_back(hold_round(pairs.pair(m.pair), t));
   std::vector<CollisionRecord> records;
   std::vector<bool> counted(ids.size(), false);
   for (std::size_t i = 0; i < members.size(); ++i) {

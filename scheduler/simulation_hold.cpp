@@ -26,7 +26,13 @@ CollisionRecord Simulation::Impl::collide_or_hold(std::uint32_t index, Contact& 
   // restitution. Its limit is the plastic collision, taken at once from the third round; from
   // the fifth, a hold that keeps letting go at once gives way to a microcollision, whose
   // rebound floor moves the pair on in time.
-  const int round = collision_round(p, t);
+  if (p.landed && -initial_normal_velocity(c) <= settle_speed(p)) {
+    p.quiet_landings = static_cast<std::uint8_t>(std::min(p.quiet_landings + 1, 255));
+  } else {
+    p.quiet_landings = 0;
+  }
+  p.landed = false;
+  const int round = hold_round(p, t);
   const std::optional<HeldLink> link = round >= 4 ? std::optional<HeldLink>() : link_of(index, dr);
   const double v_hold = hand_over_speed(c);
   const bool gentle =
@@ -44,6 +50,14 @@ CollisionRecord Simulation::Impl::collide_or_hold(std::uint32_t index, Contact& 
     after_collision(record, t);
   }
   return record;
+}
+
+double Simulation::Impl::settle_speed(const PairSet::Pair& p) const {
+  double reach = 0.0;
+  for (BodyId id : {p.a, p.b}) {
+    if (body(id).is_dynamic()) reach = std::max(reach, pairs.geometry(id).reach());
+  }
+  return std::sqrt(2.0 * world.gravity_W.norm() * 1e-9 * reach);
 }
 
 std::optional<HeldLink> Simulation::Impl::link_of(std::uint32_t index,
@@ -332,11 +346,13 @@ void Simulation::Impl::island_event(std::uint32_t i, double t) {
     if (ev.kind == IslandEvent::Kind::kLanding) {
       // Another part of the body reaches the plane: a collision, which the pair's check finds.
       pairs.pair(link.pair).held = false;
+      pairs.pair(link.pair).landed = true;
       is.links.erase(is.links.begin() + ev.link);
     }
   }
-  // A motion that keeps ending where it began makes no progress: let its contacts go.
-  if (t <= is.last_event_t) {
+  // A motion that keeps ending where it began (to a clock tick, 1e-12 of t) makes no progress:
+  // let its contacts go.
+  if (t - is.last_event_t <= 1e-12 * std::max(1.0, std::abs(t))) {
     if (++is.stalls > 50) {
       ++stats.stalled_islands;
       for (const HeldLink& link : is.links) pairs.pair(link.pair).held = false;

@@ -226,6 +226,19 @@ struct Simulation::Impl {
   static int collision_round(const PairSet::Pair& p, double t) {
     return t == p.last_collision_t ? p.collisions_at_t : 0;
   }
+  // The round its collision at t counts as for holding it: its collision round, or how many of
+  // its collisions in a row were its held face landing back on the plane slower than
+  // settle_speed, whichever is more. A bowling pin's hull, held on a facet tilted within the
+  // envelope, tipped about an edge of it clear of the lane and landed back every 1.06e-6 s at
+  // 3e-8 m/s, each round 2e-12 of its size lower (the landing event's tolerance), until it
+  // overlapped the lane; from the fourth such round it is a microcollision, whose rebound floor
+  // lifts it clear, as a train at one instant.
+  static int hold_round(const PairSet::Pair& p, double t) {
+    return std::max(collision_round(p, t), static_cast<int>(p.quiet_landings));
+  }
+  // The speed of a fall from the plane's resolution: a billionth of the larger dynamic body's
+  // reach, the height at which an island's landing events take a vertex as on the plane.
+  double settle_speed(const PairSet::Pair& p) const;
   // The hand-over speed of a contact: the microcollision speed of the bodies' weight along the
   // normal (a held body's acceleration may be zero, its weight is not). A collision that leaves
   // the contact slower is held.
