@@ -255,6 +255,37 @@ struct Records : SimulationObserver {
 
 }  // namespace
 
+namespace {
+
+// A 1 kg cube (0.1 m) 0.1 m above a 2 kg cube resting on a floor, in one of three poses:
+// aligned with it, turned 45 degrees about the vertical (an octagonal patch), and 2 cm and 1 cm
+// off centre.
+constexpr double kCubeHalf = 0.05;
+struct CubePose {
+  const char* name;
+  nlohmann::json orientation;
+  double x, y;
+};
+std::vector<CubePose> cube_poses() {
+  const double c8 = std::cos(kPi / 8), s8 = std::sin(kPi / 8);
+  return {CubePose{"aligned", {1, 0, 0, 0}, 0.0, 0.0}, CubePose{"turned", {c8, 0, 0, s8}, 0.0, 0.0},
+          CubePose{"off centre", {1, 0, 0, 0}, 0.02, 0.01}};
+}
+nlohmann::json cube_on_cube(const CubePose& v) {
+  const nlohmann::json box = {{"type", "box"}, {"half_extents", {kCubeHalf, kCubeHalf, kCubeHalf}}};
+  return {{{"name", "floor"},
+           {"motion", "fixed"},
+           {"shape", {{"type", "halfspace"}, {"normal", {0, 0, 1}}, {"offset", 0}}}},
+          {{"name", "base"}, {"mass", 2.0}, {"shape", box}, {"position", {0, 0, kCubeHalf}}},
+          {{"name", "top"},
+           {"mass", 1.0},
+           {"shape", box},
+           {"position", {v.x, v.y, 5 * kCubeHalf}},
+           {"orientation", v.orientation}}};
+}
+
+}  // namespace
+
 TEST_CASE("a cube dropped flat onto a resting cube turns neither and drifts neither",
           "[scenarios][group]") {
   // A 1 kg cube (0.1 m) dropped 0.1 m onto a 2 kg cube resting on the floor, mu 0.5: aligned
@@ -265,29 +296,11 @@ TEST_CASE("a cube dropped flat onto a resting cube turns neither and drifts neit
   // p = m (u + max(e u, v_micro)) with m the reduced mass m1 m2 / (m1 + m2) between the cubes
   // and the base's mass on the floor (the rebound never slower than the microcollision speed of
   // the default contact model), until nothing approaches faster than v_micro.
-  const double half = 0.05;
-  const double c8 = std::cos(kPi / 8), s8 = std::sin(kPi / 8);
-  struct Variant {
-    const char* name;
-    nlohmann::json orientation;
-    double x, y;
-  };
-  for (const Variant& v :
-       {Variant{"aligned", {1, 0, 0, 0}, 0.0, 0.0}, Variant{"turned", {c8, 0, 0, s8}, 0.0, 0.0},
-        Variant{"off centre", {1, 0, 0, 0}, 0.02, 0.01}}) {
+  const double half = kCubeHalf;
+  for (const CubePose& v : cube_poses()) {
     for (double e : {0.0, 0.5}) {
       CAPTURE(v.name, e);
-      const nlohmann::json box = {{"type", "box"}, {"half_extents", {half, half, half}}};
-      const nlohmann::json bodies = {
-          {{"name", "floor"},
-           {"motion", "fixed"},
-           {"shape", {{"type", "halfspace"}, {"normal", {0, 0, 1}}, {"offset", 0}}}},
-          {{"name", "base"}, {"mass", 2.0}, {"shape", box}, {"position", {0, 0, half}}},
-          {{"name", "top"},
-           {"mass", 1.0},
-           {"shape", box},
-           {"position", {v.x, v.y, 5 * half}},
-           {"orientation", v.orientation}}};
+      const nlohmann::json bodies = cube_on_cube(v);
       // The impulses checked below are the microcollision model's, one pair at a time; under the
       // persistent model the landing is one group with the base's floor contacts (the next test).
       const Scene scene = make_scene(bodies, 0.5, e, 9.81, {{"contact_model", "microcollisions"}});
@@ -340,30 +353,12 @@ TEST_CASE(
   // of a face's redundant points is resolved by under either scene law): the top leaves at e u,
   // the base stays, nothing turns. Before, the top was struck on the base's free mass and the
   // base's approach to the floor projected away unreported: at e = 0.5 the top came to rest.
-  const double half = 0.05, m = 1.0, M = 2.0;
-  const double c8 = std::cos(kPi / 8), s8 = std::sin(kPi / 8);
-  struct Variant {
-    const char* name;
-    nlohmann::json orientation;
-    double x, y;
-  };
-  for (const Variant& v :
-       {Variant{"aligned", {1, 0, 0, 0}, 0.0, 0.0}, Variant{"turned", {c8, 0, 0, s8}, 0.0, 0.0},
-        Variant{"off centre", {1, 0, 0, 0}, 0.02, 0.01}}) {
+  const double m = 1.0;  // the top's mass (the base's is 2 kg: cube_on_cube)
+  for (const CubePose& v : cube_poses()) {
     for (const char* law : {"stronge", "poisson"}) {
       for (double e : {0.0, 0.5, 1.0}) {
         CAPTURE(v.name, law, e);
-        const nlohmann::json box = {{"type", "box"}, {"half_extents", {half, half, half}}};
-        const nlohmann::json bodies = {
-            {{"name", "floor"},
-             {"motion", "fixed"},
-             {"shape", {{"type", "halfspace"}, {"normal", {0, 0, 1}}, {"offset", 0}}}},
-            {{"name", "base"}, {"mass", M}, {"shape", box}, {"position", {0, 0, half}}},
-            {{"name", "top"},
-             {"mass", m},
-             {"shape", box},
-             {"position", {v.x, v.y, 5 * half}},
-             {"orientation", v.orientation}}};
+        const nlohmann::json bodies = cube_on_cube(v);
         const Scene scene = make_scene(bodies, 0.5, e, 9.81,
                                        {{"contact_model", "persistent"}, {"restitution_law", law}});
         Simulation sim(scene.world, SimulationOptions{0.01});
