@@ -924,8 +924,7 @@ HeldModes choose_held_modes(const std::vector<HeldBody>& bodies, std::vector<Hel
         // tipped about an end edge with the slip of the facet's centre, turned into the lane
         // when integrated: it landed again every 4.7e-6 s).
         if (!c.sticks) {
-          const Vec2 slip = plane_coords(
-              c, held_velocities(bodies, contacts)[static_cast<std::size_t>(v.contact)].slip_W);
+          const Vec2 slip = plane_coords(c, kinematics(c, bodies).slip);
           if (slip.norm() > still) c.slip_dir = slip.normalized();
         }
         break;

@@ -530,8 +530,6 @@ KnownMotion known_motion(const Body& b, const BodyState& s) {
   return k;
 }
 
-// The bodies' states at time t: island bodies from `states`, the others extrapolated.
-// `follow`: sliding contacts take the direction of their present relative motion (see below).
 // A body's state at t: its integrated state `states` if it is one of the island's, else its own
 // motion advanced to t (a fixed, kinematic or free body the island's links touch).
 BodyState body_state_at(const Island& island, const World& world,
@@ -542,6 +540,8 @@ BodyState body_state_at(const Island& island, const World& world,
   return t > b.state.t ? advance(b, b.state, t, world.gravity_W, world.settings) : b.state;
 }
 
+// The bodies' states at time t: island bodies from `states`, the others extrapolated.
+// `follow`: sliding contacts take the direction of their present relative motion (see below).
 Problem build_problem(const Island& island, const World& world,
                       const std::vector<BodyState>& states, double t, bool follow = false,
                       double slip_floor = 0.0) {
@@ -1529,10 +1529,11 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
       // an edge with the rest of its face just above the plane must not sink into it).
       if (landing_threshold.size() <= i) landing_threshold.resize(i + 1, -kInfinity);
       if (landing_threshold[i] == -kInfinity) {
-        // A vertex on the plane already (to a billionth of the body's size: a face held at a gap
-        // of zero, its body tipped onto one of its edges) lands as soon as it goes down at all.
+        // A vertex on the plane already (to its resolution, kPlaneResolution of the body's size:
+        // a face held at a gap of zero, its body tipped onto one of its edges) lands as soon as
+        // it goes down at all.
         const double feature_level = std::max(feature_lowest, 0.5 * settings.envelope_m);
-        landing_threshold[i] = lowest <= 1e-9 * size
+        landing_threshold[i] = lowest <= kPlaneResolution * size
                                    ? lowest - 1e-12 * size
                                    : 0.5 * std::max(0.0, std::min(feature_level, lowest));
       }

@@ -34,6 +34,11 @@
 
 namespace palpable {
 
+// The plane's resolution, relative to the bodies' reach: a vertex this close to a held contact's
+// plane is on it (an island's landing events), and a fall from this height is a landing that
+// settles (Simulation's quiet landings).
+inline constexpr double kPlaneResolution = 1e-9;
+
 // A held contact, in the bodies' own frames (modelling frames M; S for the support's).
 struct HeldLink {
   std::uint32_t pair = 0;  // the pair's slot (PairSet)

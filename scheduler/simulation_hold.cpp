@@ -57,7 +57,7 @@ double Simulation::Impl::settle_speed(const PairSet::Pair& p) const {
   for (BodyId id : {p.a, p.b}) {
     if (body(id).is_dynamic()) reach = std::max(reach, pairs.geometry(id).reach());
   }
-  return std::sqrt(2.0 * world.gravity_W.norm() * 1e-9 * reach);
+  return std::sqrt(2.0 * world.gravity_W.norm() * kPlaneResolution * reach);
 }
 
 std::optional<HeldLink> Simulation::Impl::link_of(std::uint32_t index,

@@ -236,8 +236,8 @@ struct Simulation::Impl {
   static int hold_round(const PairSet::Pair& p, double t) {
     return std::max(collision_round(p, t), static_cast<int>(p.quiet_landings));
   }
-  // The speed of a fall from the plane's resolution: a billionth of the larger dynamic body's
-  // reach, the height at which an island's landing events take a vertex as on the plane.
+  // The speed of a fall from the plane's resolution (kPlaneResolution of the larger dynamic
+  // body's reach, the height at which an island's landing events take a vertex as on the plane).
   double settle_speed(const PairSet::Pair& p) const;
   // The hand-over speed of a contact: the microcollision speed of the bodies' weight along the
   // normal (a held body's acceleration may be zero, its weight is not). A collision that leaves
