@@ -1446,8 +1446,7 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
         } else {
           e[2].value = slip.norm() - still_speed;
           if (i < reference.size()) {
-            const Vec2 before = plane_coords(c, reference[i].slip);
-            e[3].value = slip.dot(before.norm() > still_speed ? before.normalized() : c.slip_dir);
+            e[3].value = slip.dot(plane_coords(c, reference[i].slip).normalized());
           }
         }
       }
@@ -1458,10 +1457,7 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
         } else {
           e[4].value = std::abs(spin) * size - still_speed;
           if (i < reference.size()) {
-            const double before = reference[i].dw.dot(c.n_W);
-            e[5].value = spin * (std::abs(before) * size <= still_speed ? c.spin_sign
-                                 : before >= 0.0                        ? 1.0
-                                                                        : -1.0);
+            e[5].value = spin * (reference[i].dw.dot(c.n_W) >= 0.0 ? 1.0 : -1.0);
           }
         }
       }
@@ -1472,9 +1468,7 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
         } else {
           e[6].value = roll.norm() * point_size(c) - still_speed;
           if (i < reference.size()) {
-            const Vec2 before = plane_coords(c, reference[i].dw);
-            e[7].value = roll.dot(before.norm() * point_size(c) > still_speed ? before.normalized()
-                                                                              : c.roll_dir);
+            e[7].value = roll.dot(plane_coords(c, reference[i].dw).normalized());
           }
         }
       }
