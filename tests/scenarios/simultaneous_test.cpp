@@ -253,10 +253,6 @@ struct Records : SimulationObserver {
   void on_collision(const CollisionRecord& r) override { all.push_back(r); }
 };
 
-}  // namespace
-
-namespace {
-
 // A 1 kg cube (0.1 m) 0.1 m above a 2 kg cube resting on a floor, in one of three poses:
 // aligned with it, turned 45 degrees about the vertical (an octagonal patch), and 2 cm and 1 cm
 // off centre.
