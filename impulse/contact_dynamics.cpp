@@ -117,9 +117,11 @@ Kinematics kinematics(const HeldContact& c, const std::vector<HeldBody>& bodies)
     k.slip_bias = k.m.w.cross(k.m.w.cross(k.r_m)) + k.m.w.cross(s_dot);
     p_dot = u_m + s_dot;
   } else {
+    // A material point, or one running along the mover's edge at mover_slide_W: d/dt (v + w x r)
+    // along it is a + alpha x r + w x (w x r) + w x slide.
     k.Jm.rightCols<3>() = -skew(k.r_m);
-    k.slip_bias = k.m.w.cross(k.m.w.cross(k.r_m));
-    p_dot = u_m;
+    k.slip_bias = k.m.w.cross(k.m.w.cross(k.r_m)) + k.m.w.cross(c.mover_slide_W);
+    p_dot = u_m + c.mover_slide_W;
   }
   // The support's surface point under the moving contact point: its material acceleration, plus
   // w_s x (p_dot - u_s) for the point moving over a turning surface.

@@ -99,6 +99,13 @@ struct HeldContact {
   // edge, an edge across an edge: the normal follows the closest points of two features).
   bool has_n_dot = false;
   Vec3 n_dot_W = Vec3::Zero();
+  // A point contact of a sphere and a polyhedron's vertex or edge: how far the sphere's centre is
+  // inside that feature's Voronoi region [m] (there the feature is the closest); +inf otherwise.
+  double feature_margin = kInfinity;
+  // A polyhedral mover's contact point that runs along its edge (a point contact of the edge and
+  // a sphere: the edge's point closest to the sphere's centre), its velocity over the mover [m/s]:
+  // d/dt of the mover's velocity there gains w_mover x mover_slide_W. Zero for a material point.
+  Vec3 mover_slide_W = Vec3::Zero();
   PatchKind patch = PatchKind::kPoint;
   // kSegment: the segment runs from c + lo s to c + hi s (lo <= 0 <= hi) [m].
   Vec3 segment_W = Vec3::UnitX();

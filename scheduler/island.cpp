@@ -96,6 +96,52 @@ double centred_sphere_radius(const ShapeGeometry& g) {
   return p.kind == ShapeGeometry::PieceKind::kSphere && p.p_M.norm() == 0.0 ? p.radius : 0.0;
 }
 
+// The Voronoi planes (in the body frame) of a polyhedral piece's vertex (1 point) or edge (2),
+// given by its points in the body frame; empty if the piece has no such feature.
+std::vector<HeldLink::RegionPlane> feature_region(const ShapeGeometry& g, int piece_index,
+                                                  const std::vector<Vec3>& feature_B) {
+  std::vector<HeldLink::RegionPlane> out;
+  if (piece_index < 0 || piece_index >= static_cast<int>(g.pieces().size())) return out;
+  const ShapeGeometry::Piece& piece = g.pieces()[static_cast<std::size_t>(piece_index)];
+  if (piece.kind != ShapeGeometry::PieceKind::kPolyhedron || !piece.mesh) return out;
+  const FeatureMesh& mesh = *piece.mesh;
+  const double tol = 1e-9 * std::max(piece.max_radius, 1e-3);
+  auto vertex_at = [&](const Vec3& p_B) {
+    const Vec3 p = piece.R_M.transpose() * (p_B - piece.p_M);
+    for (int v = 0; v < mesh.num_vertices(); ++v) {
+      if ((mesh.vertex(v) - p).norm() <= tol) return v;
+    }
+    return -1;
+  };
+  const VoronoiPlane* begin = nullptr;
+  const VoronoiPlane* end = nullptr;
+  if (feature_B.size() == 1) {
+    const int v = vertex_at(feature_B[0]);
+    if (v < 0) return out;
+    begin = mesh.vertex_planes_begin(v);
+    end = mesh.vertex_planes_end(v);
+  } else if (feature_B.size() == 2) {
+    const int v0 = vertex_at(feature_B[0]), v1 = vertex_at(feature_B[1]);
+    if (v0 < 0 || v1 < 0) return out;
+    for (int h = 0; h < mesh.num_half_edges() && !begin; ++h) {
+      if (mesh.tail_vertex(h) == v0 && mesh.head_vertex(h) == v1) {
+        begin = mesh.edge_planes(h);
+        end = begin + 4;
+      }
+    }
+    if (!begin) return out;
+  } else {
+    return out;
+  }
+  for (const VoronoiPlane* plane = begin; plane != end; ++plane) {
+    // eval(x_piece) = n . x_piece - offset, x_piece = R^T (x_B - p): in the body frame,
+    // (R n) . x_B - (offset + (R n) . p).
+    const Vec3 normal_B = piece.R_M * plane->normal_M;
+    out.push_back({normal_B, plane->offset + normal_B.dot(piece.p_M)});
+  }
+  return out;
+}
+
 std::optional<HeldLink> point_pair_link(std::uint32_t pair, BodyId a, BodyId b,
                                         const LinkSide& side_a, const LinkSide& side_b,
                                         const DistanceResult& closest,
@@ -137,6 +183,13 @@ std::optional<HeldLink> point_pair_link(std::uint32_t pair, BodyId a, BodyId b,
   const Vec3 n_W = mover_is_a ? closest.n_W : Vec3(-closest.n_W);
   link.normal_S = R_S.transpose() * n_W;  // the normal now (the fallback where it is undefined)
   link.t1_S = link.normal_S.unitOrthogonal();
+  if (link.sphere_radius == 0.0) {
+    link.feature_region = feature_region(
+        mover.geometry, mover_is_a ? closest.piece1 : closest.piece2, link.mover_feature_M);
+  } else if (link.support_sphere_radius == 0.0) {
+    link.feature_region = feature_region(
+        support.geometry, mover_is_a ? closest.piece2 : closest.piece1, link.support_face_S);
+  }
   return link;
 }
 
@@ -352,9 +405,10 @@ std::optional<HeldLink> make_held_link(std::uint32_t pair, BodyId a, BodyId b,
 namespace {
 
 // The normal of a point-pair link at the given states (from the support's feature to the
-// mover's), its contact point on the mover, and whether the closest points lie on the features.
+// mover's), its contact point on the mover, and whether the closest points lie on the features
+// (and a sphere's centre within the Voronoi region of a polyhedron's feature held against it).
 bool point_pair_normal(const HeldLink& link, const BodyState& mover, const BodyState& support,
-                       Vec3& n, Vec3& c) {
+                       Vec3& n, Vec3& c, double* region_margin = nullptr) {
   const Mat3 R_M = rotation(mover), R_S = rotation(support);
   std::vector<Vec3> m, s;
   if (link.sphere_radius > 0.0) {
@@ -385,7 +439,20 @@ bool point_pair_normal(const HeldLink& link, const BodyState& mover, const BodyS
     const double u = e.dot(q - f[0]) / e.squaredNorm();
     return u >= -1e-9 && u <= 1.0 + 1e-9;
   };
-  return within(m, q_m) && within(s, q_s);
+  // Within the polyhedron's feature's Voronoi region: the sphere's centre, in its body frame.
+  double margin = kInfinity;
+  if (!link.feature_region.empty()) {
+    const bool on_mover = link.sphere_radius == 0.0;
+    const BodyState& poly = on_mover ? mover : support;
+    const Vec3 centre_B =
+        (on_mover ? R_M : R_S).transpose() * ((on_mover ? support.x_W : mover.x_W) - poly.x_W);
+    for (const HeldLink::RegionPlane& plane : link.feature_region) {
+      margin = std::min(margin, plane.normal.dot(centre_B) - plane.offset);
+    }
+  }
+  if (region_margin) *region_margin = margin;
+  const double radius = std::max(link.sphere_radius, link.support_sphere_radius);
+  return within(m, q_m) && within(s, q_s) && margin >= -1e-9 * radius;
 }
 
 // A body moved rigidly by dt at its present velocities (for the normal's rate).
@@ -402,7 +469,7 @@ bool place_link(const HeldLink& link, const BodyState& mover, const BodyState& s
                 HeldContact& out) {
   if (link.point_pair) {
     Vec3 n, c;
-    if (!point_pair_normal(link, mover, support, n, c)) return false;
+    if (!point_pair_normal(link, mover, support, n, c, &out.feature_margin)) return false;
     out.n_W = n;
     out.t1_W = n.unitOrthogonal();
     out.t2_W = n.cross(out.t1_W);
@@ -416,6 +483,19 @@ bool place_link(const HeldLink& link, const BodyState& mover, const BodyState& s
         {link.sphere_radius, link.support_sphere_radius, 1e-3, (mover.x_W - support.x_W).norm()});
     const double speed =
         (mover.v_W - support.v_W).norm() + (mover.w_W.norm() + support.w_W.norm()) * size;
+    // A polyhedral mover's edge: its point closest to the sphere's centre x runs along it,
+    // q = a + ((x - a) . e) e for unit e, at ((x' - a') . e + (x - a) . e') e over the edge's own
+    // motion (a' = v + w x (a - x_M), e' = w x e).
+    out.mover_slide_W.setZero();
+    if (link.sphere_radius == 0.0 && link.mover_feature_M.size() == 2 &&
+        link.support_sphere_radius > 0.0) {
+      const Mat3 R_M = rotation(mover);
+      const Vec3 a = mover.x_W + R_M * link.mover_feature_M[0];
+      const Vec3 e = (R_M * (link.mover_feature_M[1] - link.mover_feature_M[0])).normalized();
+      const Vec3 a_dot = mover.v_W + mover.w_W.cross(a - mover.x_W);
+      const Vec3 e_dot = mover.w_W.cross(e);
+      out.mover_slide_W = ((support.v_W - a_dot).dot(e) + (support.x_W - a).dot(e_dot)) * e;
+    }
     out.has_n_dot = true;
     out.n_dot_W.setZero();
     if (speed > 0.0) {
@@ -1435,6 +1515,8 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
       } else if (c.patch == PatchKind::kSegment) {
         const double along = c.segment_W.dot(c.t1_W) * cop.x() + c.segment_W.dot(c.t2_W) * cop.y();
         e[1].value = std::min(along - c.segment_lo, c.segment_hi - along);
+      } else if (link.point_pair) {
+        e[1].value = c.feature_margin;  // the sphere's centre leaving the feature's region
       }
       // Friction: sticking within its cone; sliding until the slip falls to the still speed or
       // turns against its direction at the step's start (it passed through zero within the

@@ -78,6 +78,16 @@ struct HeldLink {
   // radius support_sphere_radius about its origin), and the normal turns with the features.
   bool point_pair = false;
   double support_sphere_radius = 0.0;
+  // A point pair of a sphere and a polyhedron's vertex or edge: that feature's Voronoi planes
+  // (V-Clip), in the polyhedron's body frame, >= 0 inside. While the sphere's centre is inside
+  // them the feature is the polyhedron's closest to it, so the gap held is the bodies' gap; when
+  // it leaves them (a ball pushing a turning pin passes from an edge over a face) the link lets
+  // go, and the pair's check finds the feature that touches now. Empty: not watched.
+  struct RegionPlane {
+    Vec3 normal = Vec3::Zero();
+    double offset = 0.0;
+  };
+  std::vector<RegionPlane> feature_region;
   // Modes, carried from one plan to the next (see HeldContact).
   bool sticks = true;
   Vec2 slip_dir = Vec2::UnitX();

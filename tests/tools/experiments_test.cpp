@@ -20,10 +20,12 @@ namespace {
 // persistent hold.
 const char* const kModels[] = {"microcollisions", "persistent"};
 
-RunResult run(const std::string& name, const std::string& model) {
+RunResult run(const std::string& name, const std::string& model,
+              const std::vector<std::string>& more = {}) {
   RunOptions options;
   options.scene_path = std::string(PALPABLE_SOURCE_DIR) + "/scenarios/" + name;
   options.overrides.push_back("/settings/contact_model=\"" + model + "\"");
+  for (const std::string& o : more) options.overrides.push_back(o);
   return palpable::tools::run_scene(options);
 }
 
@@ -246,6 +248,19 @@ TEST_CASE("coins: they bounce on their rims, land flat and spin down to rest on 
     CHECK(r.stats.collisions > 5);
     if (!persistent) CHECK(r.stats.centre_of_pressure > 100);  // microcollisions on faces
     if (persistent) CHECK(r.stats.rests >= 5);                 // every coin put at rest
+  }
+}
+
+TEST_CASE("bowling: run on until everything lies still, no two bodies ever overlap",
+          "[tools][experiments]") {
+  // The scene ends at 5 s; by 19 s the fallen pins have rolled and slid to rest against the ball
+  // and each other. Under the persistent model the ball held a pin by an edge that its point of
+  // contact ran along: 361,018 overlapping queries from 18.02 s, 2.9 mm deep, until the held
+  // contact's acceleration took in that run.
+  for (const char* model : kModels) {
+    CAPTURE(model);
+    RunResult r = run("bowling.json", model, {"/end_time=19"});
+    check_common(r);
   }
 }
 
