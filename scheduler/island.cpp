@@ -1528,7 +1528,8 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
         } else {
           e[2].value = slip.norm() - still_speed;
           if (i < reference.size()) {
-            e[3].value = slip.dot(plane_coords(c, reference[i].slip).normalized());
+            const Vec2 before = plane_coords(c, reference[i].slip);
+            e[3].value = slip.dot(before.norm() > still_speed ? before.normalized() : c.slip_dir);
           }
         }
       }
@@ -1539,7 +1540,10 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
         } else {
           e[4].value = std::abs(spin) * size - still_speed;
           if (i < reference.size()) {
-            e[5].value = spin * (reference[i].dw.dot(c.n_W) >= 0.0 ? 1.0 : -1.0);
+            const double before = reference[i].dw.dot(c.n_W);
+            e[5].value = spin * (std::abs(before) * size <= still_speed ? c.spin_sign
+                                 : before >= 0.0                        ? 1.0
+                                                                        : -1.0);
           }
         }
       }
@@ -1550,7 +1554,9 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
         } else {
           e[6].value = roll.norm() * point_size(c) - still_speed;
           if (i < reference.size()) {
-            e[7].value = roll.dot(plane_coords(c, reference[i].dw).normalized());
+            const Vec2 before = plane_coords(c, reference[i].dw);
+            e[7].value = roll.dot(before.norm() * point_size(c) > still_speed ? before.normalized()
+                                                                              : c.roll_dir);
           }
         }
       }

@@ -57,7 +57,8 @@ class PairSet {
     // Its held contact let go at last_collision_t (lift-off, separation): at that instant it is
     // not a collision unless it truly approaches (gravity pressing it is what just failed).
     bool lifted = false;
-    // Checks of an impact's approach to the instant of contact so far (Simulation, time_to_contact).
+    // Checks of an impact's approach to the instant of contact so far (Simulation,
+    // time_to_contact).
     std::uint8_t approach_steps = 0;
     // How many of its collisions in a row followed a landing of its held contact (an island's
     // event) and came down slower than a fall from the plane's resolution, without the pair
@@ -65,6 +66,9 @@ class PairSet {
     // landing back on it (Simulation, collide_or_hold's rounds).
     std::uint8_t quiet_landings = 0;
     bool landed = false;  // its held contact just landed: its next collision is that landing's
+    // How many of its holds in a row let go at the instant they were made, without the pair
+    // separating beyond the envelope in between (Simulation, collide_or_hold's rounds).
+    std::uint8_t quick_releases = 0;
   };
 
   // One geometry per distinct shape (shapes are shared between bodies). Throws InputError

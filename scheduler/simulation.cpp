@@ -212,7 +212,9 @@ double Simulation::Impl::next_check_time(const PairSet::Pair& p, const BodyState
     // of contact (DESIGN.md §8.5) leaves a pair a few ulps apart, where the floor either carried
     // it into overlap (a box struck at one corner, its other corners still landing) or stormed.
     // (Free flight only, as the model: not under the persistent model, whose held bodies fly
-    // otherwise and whose polyhedral impacts still land at the envelope's instant.)
+    // otherwise, and whose pair resting within the envelope is held where it is: with the step,
+    // a box started sliding half an envelope above a floor at mu 1e3 fell a quarter envelope
+    // before its contact was found, and slid 2.2 mm where it stops within 0.15 mm.)
     const double certified =
         certified_step(body(p.a), s1, pairs.geometry(p.a), body(p.b), s2, pairs.geometry(p.b), dr,
                        p.cache, world.gravity_W, settings(), 0.5 * dr.distance);

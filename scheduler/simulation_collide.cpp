@@ -158,10 +158,9 @@ double Simulation::Impl::time_to_contact(PairSet::Pair& p, const Contact& c,
   if (b.exact) return usable(b.dt);
   // Otherwise (polyhedra, compounds) the gap is followed along the trajectories to where it
   // closes (DESIGN.md §8.5; distance/impact_instant.hpp): every step certified, so the instant
-  // found is the first. Not yet under the persistent model: a coin held from a gap of a few
-  // ulps made its island's integration crawl (the shipped coins scene took 72 s of CPU instead
-  // of 0.1 s); there polyhedra still collide at the envelope's instant.
-  if (persistent()) return 0.0;
+  // found is the first. Under the persistent model too: a contact struck there is held a little
+  // above it (lift_to_resolution), and a hold that lets go at once, round after round, gives way
+  // to a microcollision (hold_round's quick releases).
   const ImpactInstant in = refine_instant(p, s1, s2, dr, p.cache);
   switch (in.status) {
     case InstantStatus::kFound: return usable(in.dt);
@@ -191,6 +190,7 @@ std::optional<CollisionRecord> Simulation::Impl::check_pair(std::uint32_t index,
       (contact.status != ContactStatus::kPenetrating && contact.distance > settings().envelope_m)) {
     if (contact.status != ContactStatus::kFailed) {  // apart: the next contact is a fresh one
       p.quiet_landings = 0;
+      p.quick_releases = 0;
       p.landed = false;
     }
     schedule_pair(index, next_check_time(p, s1, s2, dr, t));

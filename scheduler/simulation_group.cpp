@@ -334,7 +334,8 @@ std::optional<CollisionRecord> Simulation::Impl::collide_group(std::uint32_t ind
                      point_velocity_W(body(m.b).state, m.point_W);
       if (!(u.dot(m.n_W) < m.v_hold)) continue;
       if (const std::optional<HeldLink> link = link_of(m.pair, m.dr)) {
-        hold(m.pair, *link, m.dr, t);
+        hold(m.pair, *link, m.dr, t,
+             m.approach > m.v_hold * (1.0 + settings().microcollision_speed_slack));
         held[i] = true;
       }
     }

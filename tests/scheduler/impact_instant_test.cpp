@@ -1,6 +1,6 @@
-// Impacts at the exact instant of contact: a collision between spheres, or a sphere and a plane,
-// is applied where the gap closes (gap 0), not where the time-of-impact bound stopped (half an
-// envelope up), at any envelope and under both contact models.
+// Impacts at the exact instant of contact: a collision between spheres, a sphere and a plane, or
+// polyhedra, is applied where the gap closes (gap 0), not where the time-of-impact bound stopped
+// (half an envelope up), at any envelope and under both contact models.
 #include "scheduler/simulation.hpp"
 #include "tests/support/test_world.hpp"
 
@@ -135,13 +135,15 @@ std::vector<Vec3> box_corners(const Vec3& half) {
   return out;
 }
 
-// Body `falling` dropped onto the fixed `base` under g = 9.81 at the given envelope, under the
-// default (microcollision) contact model: the persistent model still applies polyhedral impacts
-// at the envelope's instant (scheduler/simulation_collide.cpp).
-World drop_world(double envelope, Body base, Body falling) {
+constexpr ContactModel kModels[] = {ContactModel::kMicrocollisions, ContactModel::kPersistent};
+
+// Body `falling` dropped onto the fixed `base` under g = 9.81 at the given envelope and contact
+// model.
+World drop_world(double envelope, ContactModel model, Body base, Body falling) {
   World world;
   world.gravity_W = Vec3(0, 0, -9.81);
   world.settings.envelope_m = envelope;
+  world.settings.contact_model = model;
   world.default_material = Material{0.3, 0.5};
   world.bodies.push_back(std::move(base));
   world.bodies.push_back(std::move(falling));
@@ -177,23 +179,25 @@ TEST_CASE("a box landing on a plane collides where its lowest corner reaches it"
        {Drop{"flat", Quat::Identity(), Vec3::Zero()}, Drop{"tilted", tilted, Vec3::Zero()},
         Drop{"spinning", tilted, Vec3(1.5, -4.0, 3.0)}}) {
     for (double envelope : {1e-4, 1e-2}) {
-      CAPTURE(drop.name, envelope);
-      const Vec3 x0(0.0, 0.0, 0.4);
-      const Run out =
-          run(drop_world(envelope, fixed_ground("table"),
-                         box_body("cube", half, 1.0, x0, drop.q, Vec3::Zero(), drop.w_W)),
-              0.35);
-      const double expected = lowest_vertex_reaches(box_corners(half), x0, drop.q, Vec3::Zero(),
-                                                    drop.w_W, g, 0.0, 0.35);
-      CAPTURE(expected, out.stats.instant_refinements, out.stats.instant_iterations);
-      CHECK(std::abs(first_impact(out) - expected) <= 1e-12);
-      CHECK(out.stats.penetrations == 0);
-      CHECK(out.stats.instant_unfound == 0);
-      // A few certified steps per search (quadratic convergence near the root).
-      CHECK(out.stats.instant_iterations <= 6 * out.stats.instant_refinements);
-      if (std::string(drop.name) == "flat") {
-        // Landing flat, the impulse acts through the centre of pressure: no tumbling.
-        CHECK(out.final_states[1].w_W.norm() <= 1e-9);
+      for (ContactModel model : kModels) {
+        CAPTURE(drop.name, envelope, to_string(model));
+        const Vec3 x0(0.0, 0.0, 0.4);
+        const Run out =
+            run(drop_world(envelope, model, fixed_ground("table"),
+                           box_body("cube", half, 1.0, x0, drop.q, Vec3::Zero(), drop.w_W)),
+                0.35);
+        const double expected = lowest_vertex_reaches(box_corners(half), x0, drop.q, Vec3::Zero(),
+                                                      drop.w_W, g, 0.0, 0.35);
+        CAPTURE(expected, out.stats.instant_refinements, out.stats.instant_iterations);
+        CHECK(std::abs(first_impact(out) - expected) <= 1e-12);
+        CHECK(out.stats.penetrations == 0);
+        CHECK(out.stats.instant_unfound == 0);
+        // A few certified steps per search (quadratic convergence near the root).
+        CHECK(out.stats.instant_iterations <= 6 * out.stats.instant_refinements);
+        if (std::string(drop.name) == "flat") {
+          // Landing flat, the impulse acts through the centre of pressure: no tumbling.
+          CHECK(out.final_states[1].w_W.norm() <= 1e-9);
+        }
       }
     }
   }
@@ -228,20 +232,22 @@ TEST_CASE("hulls meet at the instant their gap closes, at a vertex and across ed
     double top = -kInfinity;
     for (const Vec3& v : fixed_hull.vertices()) top = std::max(top, v.z());
     for (double envelope : {1e-4, 1e-2}) {
-      CAPTURE(k.name, envelope);
-      const Vec3 x0(0.0, 0.0, 0.5);
-      const Run out = run(drop_world(envelope, fixed_body("base", fixed_hull),
-                                     dynamic_body("tetra", falling, 1.0, x0)),
-                          0.35);
-      const double expected = lowest_vertex_reaches(falling.vertices(), x0, Quat::Identity(),
-                                                    Vec3::Zero(), Vec3::Zero(), g, top, 0.35);
-      CAPTURE(expected, out.stats.instant_refinements, out.stats.instant_iterations);
-      REQUIRE(!out.recorded.collisions.empty());
-      CHECK(std::abs(first_impact(out) - expected) <= 1e-12);
-      // From the tetrahedron (body 2) to the base (body 1).
-      CHECK(out.recorded.collisions.front().n_W.isApprox(-Vec3::UnitZ(), 1e-12));
-      CHECK(out.stats.penetrations == 0);
-      CHECK(out.stats.instant_unfound == 0);
+      for (ContactModel model : kModels) {
+        CAPTURE(k.name, envelope, to_string(model));
+        const Vec3 x0(0.0, 0.0, 0.5);
+        const Run out = run(drop_world(envelope, model, fixed_body("base", fixed_hull),
+                                       dynamic_body("tetra", falling, 1.0, x0)),
+                            0.35);
+        const double expected = lowest_vertex_reaches(falling.vertices(), x0, Quat::Identity(),
+                                                      Vec3::Zero(), Vec3::Zero(), g, top, 0.35);
+        CAPTURE(expected, out.stats.instant_refinements, out.stats.instant_iterations);
+        REQUIRE(!out.recorded.collisions.empty());
+        CHECK(std::abs(first_impact(out) - expected) <= 1e-12);
+        // From the tetrahedron (body 2) to the base (body 1).
+        CHECK(out.recorded.collisions.front().n_W.isApprox(-Vec3::UnitZ(), 1e-12));
+        CHECK(out.stats.penetrations == 0);
+        CHECK(out.stats.instant_unfound == 0);
+      }
     }
   }
 }
@@ -255,21 +261,24 @@ TEST_CASE("a spinning cube meets a fixed block at the instant its lowest corner 
   const Quat q0 = about(Vec3(1, 2, 3), 0.7);
   const Vec3 w_W(3.0, -2.0, 5.0);
   for (double envelope : {1e-4, 1e-2}) {
-    CAPTURE(envelope);
-    World world;
-    world.gravity_W = Vec3::Zero();
-    world.settings.envelope_m = envelope;
-    world.default_material = Material{0.3, 1.0};
-    // The fixed block's top face is z = 0, wide enough that the spinning cube lands on it.
-    world.bodies.push_back(
-        fixed_body("block", ConvexPolyhedron::box(Vec3(1.0, 1.0, 0.5)), Vec3(0, 0, -0.5)));
-    const Vec3 x0(0.0, 0.0, 0.3), v0(0.0, 0.0, -1.2);
-    world.bodies.push_back(box_body("cube", half, 1.0, x0, q0, v0, w_W));
-    const Run out = run(world, 0.4);
-    const double expected =
-        lowest_vertex_reaches(box_corners(half), x0, q0, v0, w_W, 0.0, 0.0, 0.4);
-    CAPTURE(expected, out.stats.instant_refinements, out.stats.instant_iterations);
-    CHECK(std::abs(first_impact(out) - expected) <= 1e-12);
-    CHECK(out.stats.penetrations == 0);
+    for (ContactModel model : kModels) {
+      CAPTURE(envelope, to_string(model));
+      World world;
+      world.gravity_W = Vec3::Zero();
+      world.settings.envelope_m = envelope;
+      world.settings.contact_model = model;
+      world.default_material = Material{0.3, 1.0};
+      // The fixed block's top face is z = 0, wide enough that the spinning cube lands on it.
+      world.bodies.push_back(
+          fixed_body("block", ConvexPolyhedron::box(Vec3(1.0, 1.0, 0.5)), Vec3(0, 0, -0.5)));
+      const Vec3 x0(0.0, 0.0, 0.3), v0(0.0, 0.0, -1.2);
+      world.bodies.push_back(box_body("cube", half, 1.0, x0, q0, v0, w_W));
+      const Run out = run(world, 0.4);
+      const double expected =
+          lowest_vertex_reaches(box_corners(half), x0, q0, v0, w_W, 0.0, 0.0, 0.4);
+      CAPTURE(expected, out.stats.instant_refinements, out.stats.instant_iterations);
+      CHECK(std::abs(first_impact(out) - expected) <= 1e-12);
+      CHECK(out.stats.penetrations == 0);
+    }
   }
 }
