@@ -72,8 +72,9 @@ struct Settings {
   RestitutionLaw restitution_law = RestitutionLaw::kStronge;
   MicrocollisionRule microcollision_rule = MicrocollisionRule::kDriftFree;
 
-  // Contact that persists: held between events, or trains of microcollisions.
-  ContactModel contact_model = ContactModel::kMicrocollisions;
+  // Contact that persists: held between events (the default since 2026-11-27), or trains of
+  // microcollisions (Mirtich's method; the default before).
+  ContactModel contact_model = ContactModel::kPersistent;
 
   // Relative speed below which a held contact counts as still [m/s]: its friction sticks (or is
   // tested for sticking), and an island of still bodies on fixed supports in equilibrium is at

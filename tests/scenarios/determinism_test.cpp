@@ -55,20 +55,20 @@ struct Expected {
 
 // The committed final-state hashes of the shipped scenes.
 const Expected kExpected[] = {
-    {"ball_on_platter.json", 0xa16074210345a65bull},
-    {"balls_in_dish.json", 0xaed579c65247bcd2ull},
-    {"block_on_ramp_accelerating.json", 0x6b95d2cc13eadd0aull},
-    {"block_on_ramp_decelerating.json", 0xa6bcfd47994a1366ull},
-    {"bowling.json", 0x3ba5112b871e6810ull},
-    {"chain_of_balls.json", 0x843cb18bc78a25d1ull},
-    {"coins.json", 0xda9a0b832272f58eull},
-    {"cylinder_rolling_slope.json", 0xdcd448b0967314f3ull},
-    {"eulers_disk.json", 0x4df5398336e9dd5aull},
-    {"pool_break.json", 0x234604182f034976ull},
-    {"rattleback.json", 0x7d691983b703edbcull},
-    {"rolling_coin.json", 0x14c702f811750404ull},
-    {"sphere_slide_to_roll.json", 0x8d0cc90c21d15ce4ull},
-    {"tippe_top.json", 0x339205ea28cbdc66ull},
+    {"ball_on_platter.json", 0x05f50177987f5e0bull},
+    {"balls_in_dish.json", 0x4831c39089258d8cull},
+    {"block_on_ramp_accelerating.json", 0x7baccee39ea4ad1eull},
+    {"block_on_ramp_decelerating.json", 0x8369ce1c7eaca70aull},
+    {"bowling.json", 0x99f069b30e20ff7aull},
+    {"chain_of_balls.json", 0x2b8c7bad1a133f04ull},
+    {"coins.json", 0xa7d63df275aeb28aull},
+    {"cylinder_rolling_slope.json", 0x4bc4bf6ecb23e51aull},
+    {"eulers_disk.json", 0x55c68a6f573a9060ull},
+    {"pool_break.json", 0xe1c1d57e3de8b6ffull},
+    {"rattleback.json", 0x003b2642906254d9ull},
+    {"rolling_coin.json", 0x373d3cc0b5b05554ull},
+    {"sphere_slide_to_roll.json", 0x9f92366eb6da51e0ull},
+    {"tippe_top.json", 0x9ef6444333ef35b8ull},
 };
 
 }  // namespace
