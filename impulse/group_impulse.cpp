@@ -57,15 +57,18 @@ int apgd_scaled(const MatX& A, const VecX& b, double lipschitz, VecX& l, Project
   const double step = 1.0 / lipschitz;
   project(l);
   VecX x_prev = l, y = l;
+  // The iteration's vectors, allocated once (up to 20,000 iterations a problem).
+  VecX g(l.size()), x(l.size()), r(l.size()), Ax(l.size());
   double theta = 1.0;
   // Scale of the impulses: the unconstrained frictionless size |b| / L.
   const double scale = std::max(b.norm() / lipschitz, 1e-300);
   for (int it = 1; it <= options.max_iterations; ++it) {
-    const VecX g = A * y + b;
-    VecX x = y - step * g;
+    g.noalias() = A * y + b;
+    x = y - step * g;
     project(x);
     // Stationarity at x: the projected-gradient step's length.
-    VecX r = x - step * (A * x + b);
+    Ax.noalias() = A * x;
+    r = x - step * (Ax + b);
     project(r);
     if ((x - r).norm() <= options.tolerance * scale) {
       l = x;
