@@ -133,8 +133,9 @@ TEST_CASE("touching: a plank placed exactly on two cubes of its own width rests 
 }
 
 TEST_CASE("touching: pyramids whose boxes touch to within rounding load and run", "[tools][run]") {
-  // Accepted at the start (they were refused over ~1e-17 m). What they do next is the default
-  // model's: a box resting on two is not held (README), so only the start is asserted here.
+  // Accepted at the start (they were refused over ~1e-17 m), and run at default settings. What
+  // they do next is asserted below, with the model named (the persistent model's exact rest);
+  // only the start is asserted here.
   for (double h : {0.1, 0.3}) {
     for (int rows = 3; rows <= 6; ++rows) {
       CAPTURE(h, rows);
