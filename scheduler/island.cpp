@@ -96,11 +96,11 @@ double centred_sphere_radius(const ShapeGeometry& g) {
   return p.kind == ShapeGeometry::PieceKind::kSphere && p.p_M.norm() == 0.0 ? p.radius : 0.0;
 }
 
-// The Voronoi planes (in the body frame) of a polyhedral piece's vertex (1 point) or edge (2),
-// given by its points in the body frame; empty if the piece has no such feature.
-std::vector<HeldLink::RegionPlane> feature_region(const ShapeGeometry& g, int piece_index,
-                                                  const std::vector<Vec3>& feature_B) {
-  std::vector<HeldLink::RegionPlane> out;
+// The Voronoi planes of a polyhedral piece's vertex (1 point) or edge (2), given by its points in
+// the body frame, turned into the body frame; empty if the piece has no such feature.
+std::vector<VoronoiPlane> feature_region(const ShapeGeometry& g, int piece_index,
+                                         const std::vector<Vec3>& feature_B) {
+  std::vector<VoronoiPlane> out;
   if (piece_index < 0 || piece_index >= static_cast<int>(g.pieces().size())) return out;
   const ShapeGeometry::Piece& piece = g.pieces()[static_cast<std::size_t>(piece_index)];
   if (piece.kind != ShapeGeometry::PieceKind::kPolyhedron || !piece.mesh) return out;
@@ -134,10 +134,12 @@ std::vector<HeldLink::RegionPlane> feature_region(const ShapeGeometry& g, int pi
     return out;
   }
   for (const VoronoiPlane* plane = begin; plane != end; ++plane) {
-    // eval(x_piece) = n . x_piece - offset, x_piece = R^T (x_B - p): in the body frame,
-    // (R n) . x_B - (offset + (R n) . p).
-    const Vec3 normal_B = piece.R_M * plane->normal_M;
-    out.push_back({normal_B, plane->offset + normal_B.dot(piece.p_M)});
+    // From the piece's frame to the body's: n . R^T (x - p) - offset = (R n) . x - (offset +
+    // (R n) . p).
+    VoronoiPlane in_body = *plane;
+    in_body.normal_M = piece.R_M * plane->normal_M;
+    in_body.offset = plane->offset + in_body.normal_M.dot(piece.p_M);
+    out.push_back(in_body);
   }
   return out;
 }
@@ -446,8 +448,8 @@ bool point_pair_normal(const HeldLink& link, const BodyState& mover, const BodyS
     const BodyState& poly = on_mover ? mover : support;
     const Vec3 centre_B =
         (on_mover ? R_M : R_S).transpose() * ((on_mover ? support.x_W : mover.x_W) - poly.x_W);
-    for (const HeldLink::RegionPlane& plane : link.feature_region) {
-      margin = std::min(margin, plane.normal.dot(centre_B) - plane.offset);
+    for (const VoronoiPlane& plane : link.feature_region) {
+      margin = std::min(margin, plane.eval(centre_B));
     }
   }
   if (region_margin) *region_margin = margin;

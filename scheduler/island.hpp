@@ -26,6 +26,7 @@
 #include "core/dormand_prince.hpp"
 #include "core/settings.hpp"
 #include "distance/closest_features.hpp"
+#include "distance/feature_mesh.hpp"
 #include "impulse/contact_dynamics.hpp"
 #include "scheduler/world.hpp"
 
@@ -83,11 +84,7 @@ struct HeldLink {
   // them the feature is the polyhedron's closest to it, so the gap held is the bodies' gap; when
   // it leaves them (a ball pushing a turning pin passes from an edge over a face) the link lets
   // go, and the pair's check finds the feature that touches now. Empty: not watched.
-  struct RegionPlane {
-    Vec3 normal = Vec3::Zero();
-    double offset = 0.0;
-  };
-  std::vector<RegionPlane> feature_region;
+  std::vector<VoronoiPlane> feature_region;
   // Modes, carried from one plan to the next (see HeldContact).
   bool sticks = true;
   Vec2 slip_dir = Vec2::UnitX();

@@ -617,33 +617,33 @@ TEST_CASE("persistent: an n-gon prism rolling down a slope keeps turning at each
 
 namespace {
 
-// A rod (a long box turned 45 degrees about its axis, so that an edge runs along its underside)
-// leaning over a fixed log (a sphere of radius R): its lower end's vertex on a frictionless floor,
-// its underside edge on the log `gap` above it, at `tilt` from the horizontal, from rest.
-World rod_over_log(double tilt, double roll, double gap, double mu) {
-  const double L = 0.5, h = 0.02, R = 0.05, s0 = 0.15;  // the edge touches the log at s0
+// A rod (a long box turned by `roll` about its axis; at 45 degrees an edge runs along its
+// underside) leaning over a fixed log (a sphere): its lower end's vertex on a frictionless floor,
+// its underside edge touching the log kTouchAt along it, at `tilt` from the horizontal, from rest.
+constexpr double kRodHalfLength = 0.5, kRodHalfWidth = 0.02, kLogRadius = 0.05, kTouchAt = 0.15;
+const Vec3 kUnderEdge_M(0, -kRodHalfWidth, -kRodHalfWidth);  // the middle of that edge, in the rod
+
+World rod_over_log(double tilt, double roll, double mu) {
   const Quat q = test::about(Vec3::UnitY(), -tilt) * test::about(Vec3::UnitX(), roll);
-  const Vec3 edge_M(0, -h, -h);  // the middle of the edge that `roll` turns to the underside
   const Vec3 up = test::about(Vec3::UnitY(), -tilt) * Vec3::UnitZ();
-  // The lower end's bottom vertex is the edge's end at s = -L: on the floor.
-  const Vec3 x = Vec3(0, 0, 1e-12) - q * (Vec3(-L, 0, 0) + edge_M);
+  // The lower end's bottom vertex is the edge's end: on the floor.
+  const Vec3 x = Vec3(0, 0, 1e-12) - q * (Vec3(-kRodHalfLength, 0, 0) + kUnderEdge_M);
   World world;
   world.settings = persistent();
   world.default_material = Material{mu, 0.0};
   world.add(test::fixed_ground("floor"));
-  world.add(test::box_body("rod", Vec3(L, h, h), 1.0, x, q));
-  const Vec3 touch = x + q * (Vec3(s0, 0, 0) + edge_M);
-  world.add(test::fixed_body("log", make_sphere(R), touch - (R + gap) * up));
+  world.add(test::box_body("rod", Vec3(kRodHalfLength, kRodHalfWidth, kRodHalfWidth), 1.0, x, q));
+  const Vec3 touch = x + q * (Vec3(kTouchAt, 0, 0) + kUnderEdge_M);
+  world.add(test::fixed_body("log", make_sphere(kLogRadius), touch - kLogRadius * up));
   return world;
 }
 
 // The distance from the log's centre to the rod's underside edge line, less the log's radius.
-double edge_gap(const BodyState& rod, const Vec3& centre, double R) {
-  const double h = 0.02;
-  const Vec3 a = rod.x_W + rod.q_WM * Vec3(0, -h, -h);
+double edge_gap(const BodyState& rod, const Vec3& centre) {
+  const Vec3 a = rod.x_W + rod.q_WM * kUnderEdge_M;
   const Vec3 e = rod.q_WM * Vec3::UnitX();
   const Vec3 d = centre - a;
-  return (d - d.dot(e) * e).norm() - R;
+  return (d - d.dot(e) * e).norm() - kLogRadius;
 }
 
 }  // namespace
@@ -658,38 +658,33 @@ TEST_CASE("persistent: a rod leaning over a log slides along its edge at the hel
   // 0.23 s.)
   for (double tilt : {0.25, 0.4, 0.6}) {
     CAPTURE(tilt);
-    {
-      const World world = rod_over_log(tilt, kPi / 4, 0.0, 0.0);
-      const Vec3 centre = world.bodies[2].state.x_W;
-      Simulation sim(world, SimulationOptions{0.005});
-      Modes rec;
-      sim.run_until(0.3, &rec);
-      REQUIRE(rec.first("hold"));
-      const double g0 = edge_gap(world.bodies[1].state, centre, 0.05);
-      const auto energy = [&](const BodyState& s) {
-        const Body& b = world.bodies[1];
-        const Mat3 R = s.q_WM.toRotationMatrix();
-        return 0.5 * b.mass.mass * s.v_W.squaredNorm() +
-               0.5 * s.w_W.dot(R * b.mass.inertia_M * R.transpose() * s.w_W) +
-               b.mass.mass * kG * s.x_W.z();
-      };
-      const double e0 = energy(world.bodies[1].state);
-      double slid = 0.0;
-      std::size_t held = 0;
-      for (std::size_t k = 0; k < rec.times.size(); ++k) {
-        const BodyState& rod = rec.samples[k][1];
-        // The edge's point nearest the log, along the rod from its centre.
-        const double along = (centre - rod.x_W).dot(rod.q_WM * Vec3::UnitX());
-        if (std::abs(along) > 0.5) break;  // past its end: off the log
-        slid = std::max(slid, std::abs(along - 0.15));
-        CHECK(edge_gap(rod, centre, 0.05) == Approx(g0).margin(1e-9));  // the integration tolerance
-        CHECK(energy(rod) == Approx(e0).margin(1e-9));
-        ++held;
-      }
-      CHECK(held > 20);
-      CHECK(slid > 0.01);  // the contact ran along the edge
-      CHECK(sim.stats().penetrations == 0);
+    const World world = rod_over_log(tilt, kPi / 4, 0.0);
+    const Body& rod_body = world.bodies[1];
+    const Vec3 centre = world.bodies[2].state.x_W;
+    Simulation sim(world, SimulationOptions{0.005});
+    Modes rec;
+    sim.run_until(0.3, &rec);
+    REQUIRE(rec.first("hold"));
+    const auto energy = [&](const BodyState& s) {
+      return kinetic_energy(rod_body, s) + rod_body.mass.mass * kG * s.x_W.z();
+    };
+    const double g0 = edge_gap(rod_body.state, centre);
+    const double e0 = energy(rod_body.state);
+    double slid = 0.0;
+    std::size_t held = 0;
+    for (const auto& states : rec.samples) {
+      const BodyState& rod = states[1];
+      // The edge's point nearest the log, along the rod from its centre.
+      const double along = (centre - rod.x_W).dot(rod.q_WM * Vec3::UnitX());
+      if (std::abs(along) > kRodHalfLength) break;  // past its end: off the log
+      slid = std::max(slid, std::abs(along - kTouchAt));
+      CHECK(edge_gap(rod, centre) == Approx(g0).margin(1e-9));  // the integration tolerance
+      CHECK(energy(rod) == Approx(e0).margin(1e-9));
+      ++held;
     }
+    CHECK(held > 20);
+    CHECK(slid > 0.01);  // the contact ran along the edge
+    CHECK(sim.stats().penetrations == 0);
   }
 }
 
@@ -703,7 +698,7 @@ TEST_CASE("persistent: a rod held by its edge on a log rolls onto its face witho
   for (double roll : {kPi / 4 + 0.2, kPi / 4 - 0.3}) {
     for (double mu : {0.0, 0.5}) {
       CAPTURE(roll, mu);
-      const World world = rod_over_log(0.3, roll, 0.0, mu);
+      const World world = rod_over_log(0.3, roll, mu);
       const Vec3 centre = world.bodies[2].state.x_W;
       Simulation sim(world, SimulationOptions{0.002});
       Modes rec;
@@ -713,9 +708,9 @@ TEST_CASE("persistent: a rod held by its edge on a log rolls onto its face witho
         const BodyState& rod = states[1];
         // The log's centre against the box: its distance from the nearest point of the box.
         const Vec3 p = rod.q_WM.conjugate() * (centre - rod.x_W);
-        const Vec3 half(0.5, 0.02, 0.02);
+        const Vec3 half(kRodHalfLength, kRodHalfWidth, kRodHalfWidth);
         const Vec3 nearest = p.cwiseMax(-half).cwiseMin(half);
-        closest = std::min(closest, (p - nearest).norm() - 0.05);
+        closest = std::min(closest, (p - nearest).norm() - kLogRadius);
       }
       CHECK(closest >= -1e-9);
       CHECK(rec.first("tip"));
