@@ -155,16 +155,27 @@ ToiMotion Simulation::Impl::motion_for(BodyId id, const BodyState& s, const Body
 }
 
 ToiBound Simulation::Impl::held_time_of_impact(const PairSet::Pair& p, const BodyState& s1,
-                                               const BodyState& s2,
-                                               const DistanceResult& dr) const {
+                                               const BodyState& s2, const DistanceResult& dr,
+                                               bool halve_gap) const {
   const ToiMotion m1 = motion_for(p.a, s1, s2, p.b);
   const ToiMotion m2 = motion_for(p.b, s2, s1, p.a);
-  const double d_target = derived_target_gap(settings());
-  if (p.cache.piece_results().empty()) return toi_bound(m1, m2, dr, d_target, settings());
+  // A pair already inside the target gap and moving apart, or at rest against a fixed body (let
+  // go within the envelope: a ball released from a wall it still nearly touches), is checked
+  // again before it can close half of what is left, not at once: aimed at half an envelope, its
+  // bound was zero, and such a pair was checked at every tick of the clock (8.7 million checks
+  // in 0.3 s of a ball in a corner). Two dynamic bodies at rest within the envelope are still
+  // checked at once: a box landing on two held boxes meets the second as it meets the first, in
+  // one group (aimed at half its gap, the second was met 1.4 ms later, and the pyramid of four
+  // rows that followed did not end).
+  auto target = [&](const DistanceResult& r) {
+    const double d_target = derived_target_gap(settings());
+    return halve_gap && r.distance > 0.0 ? std::min(d_target, 0.5 * r.distance) : d_target;
+  };
+  if (p.cache.piece_results().empty()) return toi_bound(m1, m2, dr, target(dr), settings());
   ToiBound best;
   for (const DistanceResult& piece : p.cache.piece_results()) {
     if (held_piece(p, piece)) continue;
-    const ToiBound b = toi_bound(m1, m2, piece, d_target, settings());
+    const ToiBound b = toi_bound(m1, m2, piece, target(piece), settings());
     if (b.dt < best.dt) best = b;
   }
   return best;
@@ -179,9 +190,17 @@ double Simulation::Impl::next_check_time(const PairSet::Pair& p, const BodyState
     return t + floor;
   }
   bool resting = false;  // within the envelope, neither approaching nor accelerated together
+  // Within the envelope and moving apart faster than the still speed, or at rest against a fixed
+  // or kinematic body without an acceleration towards it (aimed at half the gap that is left).
+  bool halve_gap = false;
+  const bool one_known = !body(p.a).is_dynamic() || !body(p.b).is_dynamic();
+  auto moving_apart = [&](const Contact& c) {
+    return c.u_n > settings().still_speed_mps || (one_known && c.u_n >= 0.0 && c.g_n == 0.0);
+  };
   if (known) {
     if (dr.status == ContactStatus::kPenetrating) return t + floor;
     resting = known->g_n == 0.0;
+    halve_gap = dr.distance <= settings().envelope_m && moving_apart(*known);
   } else {
     const DistanceResult& contact = contact_result(p, s1, s2, dr);
     if (contact.status == ContactStatus::kPenetrating ||
@@ -197,11 +216,12 @@ double Simulation::Impl::next_check_time(const PairSet::Pair& p, const BodyState
       }
       if (contact.status == ContactStatus::kPenetrating) return t + floor;
       resting = c.g_n == 0.0;
+      halve_gap = moving_apart(c);
     }
   }
   ToiBound bound =
       island(p.a) || island(p.b)
-          ? held_time_of_impact(p, s1, s2, dr)
+          ? held_time_of_impact(p, s1, s2, dr, halve_gap)
           : time_of_impact(body(p.a), s1, pairs.geometry(p.a), body(p.b), s2, pairs.geometry(p.b),
                            dr, p.cache, world.gravity_W, settings());
   if (!persistent() && !bound.exact && (bound.floored || bound.dt < floor) &&

@@ -140,9 +140,10 @@ struct Simulation::Impl {
                        BodyId other_id) const;
 
   // The conservative bound of a pair with a held body (never exact: no closed form follows a held
-  // body's motion).
+  // body's motion). `halve_gap`: within the envelope, moving apart or at rest against a fixed
+  // body; aimed at half the gap it has left instead of half the envelope.
   ToiBound held_time_of_impact(const PairSet::Pair& p, const BodyState& s1, const BodyState& s2,
-                               const DistanceResult& dr) const;
+                               const DistanceResult& dr, bool halve_gap) const;
 
   // The next event time of a pair from its closest features at time t.
   // `known`: the contact check_pair already made of this very query and found not approaching

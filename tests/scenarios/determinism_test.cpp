@@ -56,11 +56,11 @@ struct Expected {
 // The committed final-state hashes of the shipped scenes.
 const Expected kExpected[] = {
     {"ball_on_platter.json", 0x05f50177987f5e0bull},
-    {"balls_in_dish.json", 0x4831c39089258d8cull},
+    {"balls_in_dish.json", 0x3bbd922e7cbed7caull},
     {"block_on_ramp_accelerating.json", 0x7baccee39ea4ad1eull},
     {"block_on_ramp_decelerating.json", 0x8369ce1c7eaca70aull},
-    {"bowling.json", 0x99f069b30e20ff7aull},
-    {"chain_of_balls.json", 0x2b8c7bad1a133f04ull},
+    {"bowling.json", 0xa1cfa380b59822bbull},
+    {"chain_of_balls.json", 0x7b57d4a42901664full},
     {"coins.json", 0xa7d63df275aeb28aull},
     {"cylinder_rolling_slope.json", 0x4bc4bf6ecb23e51aull},
     {"eulers_disk.json", 0x55c68a6f573a9060ull},

@@ -717,3 +717,43 @@ TEST_CASE("persistent: a rod held by its edge on a log rolls onto its face witho
     }
   }
 }
+
+TEST_CASE("persistent: a ball let go near a wall is not checked at every tick of the clock",
+          "[scheduler][persistent]") {
+  // A ball in a corner, on the floor against a wall, with a second ball laid on it just off the
+  // top, away from the wall: the top ball rolls off, the lower one is pushed against the wall, then
+  // lets go of it and stays a few micrometres away, inside the envelope, at rest. Checked for a
+  // time of impact aimed at half an envelope, such a pair had a bound of zero and was checked
+  // again at every tick of the clock: 8,658,143 pair checks in 0.3 s (tilt 10 degrees), 3,294,151
+  // (30 degrees). Aimed at half of the gap that is left, it is checked again before that can
+  // close, and never overlaps: 43 and 1,960 pair checks.
+  const double R = 0.025, m = 0.1, wall_x = 0.3;
+  for (double tilt_deg : {10.0, 30.0}) {
+    CAPTURE(tilt_deg);
+    const double tilt = tilt_deg * kPi / 180.0;
+    World world;
+    world.settings = persistent();
+    Material material{0.5, 0.3};
+    material.rolling_resistance = 1e-3;
+    world.default_material = material;
+    world.add(test::fixed_ground("floor"));
+    world.add(test::fixed_body("wall", make_halfspace(-Vec3::UnitX(), -wall_x)));
+    const Vec3 a(wall_x - R, 0, R);
+    world.add(test::sphere_body("a", R, m, a));
+    world.add(test::sphere_body("b", R, m, a + 2 * R * Vec3(-std::sin(tilt), 0, std::cos(tilt))));
+    Simulation sim(world, SimulationOptions{0.01});
+    Modes rec;
+    sim.run_until(0.3, &rec);
+    bool let_go = false;  // the wall (body 1) let go of the lower ball (body 2)
+    for (const ModeChange& c : rec.changes) {
+      let_go = let_go || (std::string(c.kind) == "release" && c.a.index == 1 && c.b.index == 2);
+    }
+    CHECK(let_go);
+    // A few checks per halving of the gap and per collision, not millions.
+    CHECK(sim.stats().pair_checks < 5000);
+    CHECK(sim.stats().penetrations == 0);
+    for (const auto& states : rec.samples) {
+      CHECK(states[2].x_W.x() <= wall_x - R + 1e-12);  // never into the wall
+    }
+  }
+}
