@@ -167,8 +167,8 @@ ToiBound Simulation::Impl::held_time_of_impact(const PairSet::Pair& p, const Bod
   // checked at once: a box landing on two held boxes meets the second as it meets the first, in
   // one group (aimed at half its gap, the second was met 1.4 ms later, and the pyramid of four
   // rows that followed did not end).
+  const double d_target = derived_target_gap(settings());
   auto target = [&](const DistanceResult& r) {
-    const double d_target = derived_target_gap(settings());
     return halve_gap && r.distance > 0.0 ? std::min(d_target, 0.5 * r.distance) : d_target;
   };
   if (p.cache.piece_results().empty()) return toi_bound(m1, m2, dr, target(dr), settings());
@@ -189,18 +189,18 @@ double Simulation::Impl::next_check_time(const PairSet::Pair& p, const BodyState
     ++stats.distance_failures;
     return t + floor;
   }
-  bool resting = false;  // within the envelope, neither approaching nor accelerated together
-  // Within the envelope and moving apart faster than the still speed, or at rest against a fixed
-  // or kinematic body without an acceleration towards it (aimed at half the gap that is left).
-  bool halve_gap = false;
+  // Of a contact within the envelope: neither approaching nor accelerated together (`resting`);
+  // moving apart faster than the still speed, or resting against a fixed or kinematic body
+  // (`halve_gap`, see held_time_of_impact).
+  bool resting = false, halve_gap = false;
   const bool one_known = !body(p.a).is_dynamic() || !body(p.b).is_dynamic();
-  auto moving_apart = [&](const Contact& c) {
-    return c.u_n > settings().still_speed_mps || (one_known && c.u_n >= 0.0 && c.g_n == 0.0);
+  auto within_envelope = [&](const Contact& c) {
+    resting = c.g_n == 0.0;
+    halve_gap = c.u_n > settings().still_speed_mps || (one_known && c.u_n >= 0.0 && resting);
   };
   if (known) {
     if (dr.status == ContactStatus::kPenetrating) return t + floor;
-    resting = known->g_n == 0.0;
-    halve_gap = dr.distance <= settings().envelope_m && moving_apart(*known);
+    within_envelope(*known);
   } else {
     const DistanceResult& contact = contact_result(p, s1, s2, dr);
     if (contact.status == ContactStatus::kPenetrating ||
@@ -215,8 +215,7 @@ double Simulation::Impl::next_check_time(const PairSet::Pair& p, const BodyState
         if (patch_approaching(with_patch, s1, s2)) return t;
       }
       if (contact.status == ContactStatus::kPenetrating) return t + floor;
-      resting = c.g_n == 0.0;
-      halve_gap = moving_apart(c);
+      within_envelope(c);
     }
   }
   ToiBound bound =
