@@ -73,13 +73,30 @@ class Jacobi {
       const Real sech = 1 / std::cosh(u);
       return {std::tanh(u), sech, sech};
     }
+    // Near the poles u = +-K (sn = +-1) the amplitude below is found to an absolute 1e-16, and cn
+    // = cos(amplitude) only to that, while cn there is as small as k' or smaller: near the
+    // separatrix (k' << 1) its relative error 1e-16 / k' went into the phase and the precession
+    // angle (a box turning about its intermediate axis, 1e-20 rad/s about the others, advanced
+    // by 1e-6 s through 37 degrees). There the functions come from a point half a period away,
+    // by the shift u = +-K + v (DLMF 22.4.3): sn = +-cd(v), cn = -+k' sd(v), dn = k' nd(v).
+    const Real K = complete_K();
+    if (std::fabs(u) > K / 2 && std::fabs(u) <= 3 * K / 2) {
+      const Real s = u > 0 ? 1 : -1;
+      const SnCnDn f = principal(u - s * K);
+      const Real kp = std::sqrt(kp2_);
+      return {s * f.cn / f.dn, -s * kp * f.sn / f.dn, kp / f.dn};
+    }
+    return principal(u);
+  }
+
+ private:
+  SnCnDn principal(Real u) const {
     double phi = std::ldexp(a_[levels_] * static_cast<double>(u), levels_);
     for (int j = levels_; j > 0; --j) phi = 0.5 * (phi + std::asin(c_[j] * std::sin(phi) / a_[j]));
     const Real cn = std::cos(phi);
     return {std::sin(phi), cn, std::sqrt(kp2_ + k2_ * cn * cn)};
   }
 
- private:
   static constexpr int kMaxLevels = 40;
   static constexpr Real kHalfPi = 1.570796326794896619231321691639751442L;
   Real k2_, kp2_;
