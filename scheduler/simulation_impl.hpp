@@ -266,6 +266,10 @@ struct Simulation::Impl {
   // A polyhedron in free flight held on a fixed or kinematic support at a gap below the plane's
   // resolution is moved up to it along the contact normal (see the definition).
   void lift_to_resolution(HeldLink& link);
+  // A polyhedron let go of its only held contact (a landing), found within the plane's
+  // resolution of its fixed or kinematic support or as far below it, is put back at the
+  // resolution above it (see the definition).
+  void lift_released(const HeldLink& link);
 
   // The island holding all of `ids` (dynamic bodies): theirs merged, or a new one.
   std::uint32_t join(const std::vector<BodyId>& ids, double t);

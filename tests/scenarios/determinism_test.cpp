@@ -59,7 +59,7 @@ const Expected kExpected[] = {
     {"balls_in_dish.json", 0x3bbd922e7cbed7caull},
     {"block_on_ramp_accelerating.json", 0x7baccee39ea4ad1eull},
     {"block_on_ramp_decelerating.json", 0x8369ce1c7eaca70aull},
-    {"bowling.json", 0xa1cfa380b59822bbull},
+    {"bowling.json", 0xd5685c7ec2735c5cull},
     {"chain_of_balls.json", 0x7b57d4a42901664full},
     {"coins.json", 0xa7d63df275aeb28aull},
     {"cylinder_rolling_slope.json", 0x4bc4bf6ecb23e51aull},
