@@ -467,6 +467,18 @@ BodyState drift(const BodyState& s, double dt) {
 
 }  // namespace
 
+double held_feature_height(const HeldLink& link, const BodyState& mover, const BodyState& support) {
+  const Mat3 R_S = rotation(support);
+  const Mat3 R_M = rotation(mover);
+  const Vec3 n = R_S * link.normal_S;
+  const Vec3 plane = support.x_W + R_S * link.point_S;
+  double lowest = kInfinity;
+  for (const Vec3& f : link.mover_feature_M) {
+    lowest = std::min(lowest, n.dot(mover.x_W + R_M * f - plane));
+  }
+  return lowest;
+}
+
 bool place_link(const HeldLink& link, const BodyState& mover, const BodyState& support,
                 HeldContact& out) {
   if (link.point_pair) {
@@ -1594,15 +1606,12 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
         e[8].value = rise - landing_threshold[i];
         continue;
       }
-      double lowest = kInfinity, feature_lowest = kInfinity;
+      double lowest = kInfinity;
+      const double feature_lowest = held_feature_height(link, sm, ss);
       const ShapeGeometry::Piece& piece = g.pieces()[0];
       const Mat3 R = rotation(sm) * piece.R_M;
       const Vec3 origin = sm.x_W + rotation(sm) * piece.p_M;
       const double tol = 1e-9 * size;
-      const Mat3 R_body = rotation(sm);
-      for (const Vec3& f : link.mover_feature_M) {
-        feature_lowest = std::min(feature_lowest, c.n_W.dot(sm.x_W + R_body * f - plane));
-      }
       for (int v = 0; v < piece.mesh->num_vertices(); ++v) {
         const Vec3 q_M = piece.p_M + piece.R_M * piece.mesh->vertex(v);
         bool held_vertex = false;

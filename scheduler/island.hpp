@@ -122,6 +122,10 @@ std::optional<HeldLink> make_held_link(std::uint32_t pair, BodyId a, BodyId b,
 bool place_link(const HeldLink& link, const BodyState& mover, const BodyState& support,
                 HeldContact& out);
 
+// How far a polyhedral mover's held feature (mover_feature_M) is above the link's plane at the
+// given states: its lowest point [m]; +inf for a link without one (a sphere, a curved point).
+double held_feature_height(const HeldLink& link, const BodyState& mover, const BodyState& support);
+
 // The event that ends an island's present motion.
 struct IslandEvent {
   enum class Kind : std::uint8_t {

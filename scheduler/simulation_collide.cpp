@@ -159,7 +159,7 @@ double Simulation::Impl::time_to_contact(PairSet::Pair& p, const Contact& c,
   // Otherwise (polyhedra, compounds) the gap is followed along the trajectories to where it
   // closes (DESIGN.md §8.5; distance/impact_instant.hpp): every step certified, so the instant
   // found is the first. Under the persistent model too: a contact struck there is held a little
-  // above it (lift_to_resolution), and a hold that lets go at once, round after round, gives way
+  // above it (raise_to_resolution), and a hold that lets go at once, round after round, gives way
   // to a microcollision (hold_round's quick releases).
   const ImpactInstant in = refine_instant(p, s1, s2, dr, p.cache);
   switch (in.status) {

@@ -89,7 +89,8 @@ void Simulation::Impl::after_collision(const CollisionRecord& record, double t) 
 void Simulation::Impl::hold(std::uint32_t index, HeldLink link, const DistanceResult& dr, double t,
                             bool struck) {
   PairSet::Pair& p = pairs.pair(index);
-  if (struck) lift_to_resolution(link);
+  // A body in free flight held from the gap it was struck at (a few ulps).
+  if (struck && !island(link.mover)) link.gap = raise_to_resolution(link, link.gap);
   std::vector<BodyId> dynamic;
   for (BodyId id : {p.a, p.b}) {
     if (body(id).is_dynamic()) dynamic.push_back(id);
@@ -125,48 +126,26 @@ void Simulation::Impl::hold(std::uint32_t index, HeldLink link, const DistanceRe
   }
 }
 
-void Simulation::Impl::lift_to_resolution(HeldLink& link) {
+double Simulation::Impl::raise_to_resolution(const HeldLink& link, double gap) {
   // A polyhedron struck at the instant its gap closes (a few ulps) would be held there, and the
   // held motion's integration error (1e-12 of its size over a motion) carries it into the
-  // support: a bowling pin lying on the lane was found 2e-12 m into it when it lifted off. A body
-  // in free flight held on a fixed or kinematic support is placed at the plane's resolution
-  // above it (kPlaneResolution of its reach, a few 1e-10 m): no deeper than its landing events
-  // resolve the plane, and far above the integration's drift.
-  Body& mover = body(link.mover);
-  const Body& support = body(link.support);
-  if (!mover.is_dynamic() || support.is_dynamic() || island(link.mover) ||
-      link.sphere_radius > 0.0 || link.curved_shape || link.point_pair) {
-    return;
-  }
-  const double floor = kPlaneResolution * pairs.geometry(link.mover).reach();
-  if (!(link.gap < floor)) return;
-  mover.state.x_W += (floor - link.gap) * (support.state.q_WM * link.normal_S);
-  link.gap = floor;
-}
-
-void Simulation::Impl::lift_released(const HeldLink& link) {
-  // The held motion keeps a gap to the integration's accuracy, not exactly: a 32-gon prism's
-  // pivot, held for 0.17 s, was 1.4e-11 m into the slope when its next face landed. Found
-  // overlapping, the pair could not be held again, and a microcollision there pushed the pivot
-  // off at v_micro (5.8e-4 J gained) and yawed the prism. A body let go of its only contact, on a
-  // fixed or kinematic support, with a flat feature, goes back to the plane's resolution above
-  // it, as a fresh hold puts it (lift_to_resolution).
+  // support: a bowling pin lying on the lane was found 2e-12 m into it when it lifted off; a
+  // 32-gon prism's pivot, held for 0.17 s, was 1.4e-11 m into the slope when its next face landed
+  // (found overlapping, the pair could not be held again, and a microcollision there pushed the
+  // pivot off at v_micro, 5.8e-4 J gained, and yawed the prism). A body on a fixed or kinematic
+  // support is placed at the plane's resolution above it (kPlaneResolution of its reach, a few
+  // 1e-10 m): no deeper than its landing events resolve the plane, and far above the
+  // integration's drift. Deeper than that below the plane is an overlap, and left as one.
   Body& mover = body(link.mover);
   const Body& support = body(link.support);
   if (!mover.is_dynamic() || support.is_dynamic() || link.sphere_radius > 0.0 ||
-      link.curved_shape || link.point_pair || link.mover_feature_M.empty()) {
-    return;
-  }
-  const Mat3 R_S = support.state.q_WM.toRotationMatrix();
-  const Mat3 R_M = mover.state.q_WM.toRotationMatrix();
-  const Vec3 n_W = R_S * link.normal_S;
-  const Vec3 plane_W = support.state.x_W + R_S * link.point_S;
-  double lowest = kInfinity;
-  for (const Vec3& f : link.mover_feature_M) {
-    lowest = std::min(lowest, n_W.dot(mover.state.x_W + R_M * f - plane_W));
+      link.curved_shape || link.point_pair) {
+    return gap;
   }
   const double floor = kPlaneResolution * pairs.geometry(link.mover).reach();
-  if (lowest < floor && lowest > -floor) mover.state.x_W += (floor - lowest) * n_W;
+  if (!(gap < floor && gap > -floor)) return gap;
+  mover.state.x_W += (floor - gap) * (support.state.q_WM * link.normal_S);
+  return floor;
 }
 
 void Simulation::Impl::defer_plan(std::uint32_t i, double t) {
@@ -396,7 +375,11 @@ void Simulation::Impl::island_event(std::uint32_t i, double t) {
       // Another part of the body reaches the plane: a collision, which the pair's check finds.
       pairs.pair(link.pair).held = false;
       pairs.pair(link.pair).landed = true;
-      if (is.links.size() == 1) lift_released(link);
+      // Let go of its only contact, the body flies on from where the held motion left it.
+      if (is.links.size() == 1) {
+        raise_to_resolution(
+            link, held_feature_height(link, body(link.mover).state, body(link.support).state));
+      }
       is.links.erase(is.links.begin() + ev.link);
     }
   }

@@ -260,16 +260,13 @@ struct Simulation::Impl {
 
   // Holds the contact of pair `index` (states committed at t): its link joins the island of its
   // dynamic bodies. A contact `struck` (held after an impact, not a gentle landing) is lifted to
-  // the plane's resolution first (lift_to_resolution).
+  // the plane's resolution first (raise_to_resolution).
   void hold(std::uint32_t index, HeldLink link, const DistanceResult& dr, double t,
             bool struck = false);
-  // A polyhedron in free flight held on a fixed or kinematic support at a gap below the plane's
-  // resolution is moved up to it along the contact normal (see the definition).
-  void lift_to_resolution(HeldLink& link);
-  // A polyhedron let go of its only held contact (a landing), found within the plane's
-  // resolution of its fixed or kinematic support or as far below it, is put back at the
-  // resolution above it (see the definition).
-  void lift_released(const HeldLink& link);
+  // A polyhedron on a fixed or kinematic support (held, or just let go) `gap` above its plane,
+  // within the plane's resolution of it above or below, is moved along the normal to that
+  // resolution above it (see the definition). Returns the gap it leaves.
+  double raise_to_resolution(const HeldLink& link, double gap);
 
   // The island holding all of `ids` (dynamic bodies): theirs merged, or a new one.
   std::uint32_t join(const std::vector<BodyId>& ids, double t);
