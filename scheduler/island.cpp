@@ -880,6 +880,7 @@ Island::PlanResult Island::plan(World& world, const std::vector<const ShapeGeome
   const double still = settings.still_speed_mps;
   t0 = t;
   steps_.clear();
+  integration = IntegrationCount{};
   orientation_cache_.clear();
   anchor_.clear();
   for (BodyId id : bodies) {
@@ -1683,6 +1684,7 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
     dopri5::take_step(rhs, t, y, k0, h, rtol, atol, step);
     if (failed) break;
     if (step.error > 1.0) {
+      ++integration.rejected;
       h = dopri5::next_step_size(h, step.error);
       if (++rejected > 1000 || h <= 1e-14 * std::max(1.0, t)) {
         failed = true;
@@ -1720,6 +1722,7 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
           {w_max[k], step.y0.segment<3>(o + 10).norm(), step.y1.segment<3>(o + 10).norm()});
     }
     steps_.push_back(step);
+    ++integration.steps;
     if (theta_event <= 1.0) {
       t_end = t + theta_event * h;
       event = found;
@@ -1734,6 +1737,7 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
     h = dopri5::next_step_size(h, step.error);
   }
   if (steps_.size() >= kMaxSteps && event.kind == IslandEvent::Kind::kSegmentEnd) t_end = t;
+  integration.failed = failed;
   if (failed) {
     // The contact problem broke down along the way: end the segment where it last held.
     t_end = steps_.empty() ? t0 : steps_.back().t + steps_.back().h;

@@ -179,6 +179,15 @@ class Island {
   // chosen; links that let go are removed; the motion and its next event are found.
   PlanResult plan(World& world, const std::vector<const ShapeGeometry*>& geometry, double t);
 
+  // What the present motion's integration cost (Motion::kIntegrated; zero otherwise):
+  // Dormand-Prince steps accepted and rejected, and whether the contact problem broke down along
+  // the way (the motion then ends early, where it last held).
+  struct IntegrationCount {
+    std::uint64_t steps = 0, rejected = 0;
+    bool failed = false;
+  };
+  IntegrationCount integration;
+
   // A body's state at time t >= t0 (index into `bodies`).
   BodyState state_at(std::size_t k, double t) const;
   // Index of `id` in `bodies`, or -1.

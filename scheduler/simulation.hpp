@@ -63,6 +63,11 @@ struct SimulationStats {
   std::uint64_t rests = 0;              // islands put at rest
   std::uint64_t held_inconsistent = 0;  // contact problems without a solution (let go)
   std::uint64_t stalled_islands = 0;    // islands that stopped making progress (let go)
+  // Integrated island motions (Island::integration): Dormand-Prince steps accepted and rejected,
+  // and motions whose contact problem broke down along the way (ended early, re-planned).
+  std::uint64_t island_steps = 0;
+  std::uint64_t island_rejected_steps = 0;
+  std::uint64_t island_failed_motions = 0;
 };
 
 // A held contact changing how it behaves, at its exact instant (persistent contact model).

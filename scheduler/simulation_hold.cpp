@@ -235,6 +235,9 @@ void Simulation::Impl::replan(std::uint32_t i, double t) {
     const Island::PlanResult r = is.plan(world, geometries, t);
     ++stats.island_plans;
     if (r.inconsistent) ++stats.held_inconsistent;
+    stats.island_steps += is.integration.steps;
+    stats.island_rejected_steps += is.integration.rejected;
+    if (is.integration.failed) ++stats.island_failed_motions;
     for (std::uint32_t pair : r.released) {
       PairSet::Pair& q = pairs.pair(pair);
       q.held = false;

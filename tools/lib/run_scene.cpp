@@ -386,7 +386,16 @@ nlohmann::json summary_json(const RunResult& r) {
                      {"integration_steps", s.integration_steps},
                      {"pairs_created", s.pairs_created},
                      {"max_pairs", s.max_pairs},
-                     {"box_tests", s.box_tests}};
+                     {"box_tests", s.box_tests},
+                     {"holds", s.holds},
+                     {"mode_changes", s.mode_changes},
+                     {"island_plans", s.island_plans},
+                     {"rests", s.rests},
+                     {"held_inconsistent", s.held_inconsistent},
+                     {"stalled_islands", s.stalled_islands},
+                     {"island_steps", s.island_steps},
+                     {"island_rejected_steps", s.island_rejected_steps},
+                     {"island_failed_motions", s.island_failed_motions}};
   const Settings& st = r.scene.world.settings;
   j["palpable"] = {{"version", kVersion}, {"commit", kGitCommit}};
   j["scene_path"] = r.scene.source;
