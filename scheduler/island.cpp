@@ -1675,7 +1675,6 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
   std::vector<Vec3> a_start(bodies.size(), Vec3::Zero());
   t_end = cap;
   event = IslandEvent{IslandEvent::Kind::kSegmentEnd, -1};
-  int rejected = 0;
   // A segment of at most this many steps (its dense output is kept): a motion that needs more is
   // re-planned where it ends, so memory stays bounded whatever the motion does.
   constexpr std::size_t kMaxSteps = 4096;
@@ -1684,9 +1683,8 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
     dopri5::take_step(rhs, t, y, k0, h, rtol, atol, step);
     if (failed) break;
     if (step.error > 1.0) {
-      ++integration.rejected;
       h = dopri5::next_step_size(h, step.error);
-      if (++rejected > 1000 || h <= 1e-14 * std::max(1.0, t)) {
+      if (++integration.rejected > 1000 || h <= 1e-14 * std::max(1.0, t)) {
         failed = true;
         break;
       }
@@ -1722,7 +1720,6 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
           {w_max[k], step.y0.segment<3>(o + 10).norm(), step.y1.segment<3>(o + 10).norm()});
     }
     steps_.push_back(step);
-    ++integration.steps;
     if (theta_event <= 1.0) {
       t_end = t + theta_event * h;
       event = found;
@@ -1737,6 +1734,7 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
     h = dopri5::next_step_size(h, step.error);
   }
   if (steps_.size() >= kMaxSteps && event.kind == IslandEvent::Kind::kSegmentEnd) t_end = t;
+  integration.steps = steps_.size();
   integration.failed = failed;
   if (failed) {
     // The contact problem broke down along the way: end the segment where it last held.
