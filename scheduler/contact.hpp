@@ -13,7 +13,10 @@
 //    centre of mass, so a sliding block does not rock from corner to corner; where that line
 //    leaves the patch the body really tips, about the patch boundary;
 //  - an edge on a face (a segment patch): only the rotation about n x s is held, so a rod or a
-//    coin on its rim still rolls and tips about the segment;
+//    coin on its rim still rolls and tips about the segment; so too a body turning about one
+//    edge of a polygon patch onto the rest of it (a prism rolling onto its next face): it lands
+//    along the opposite edge, the corner landing first and its neighbour, held as a segment
+//    unless one leads the other by more than the microcollision speed;
 //  - a face on a face between two dynamic bodies (a stack; DESIGN.md §4's last case): the patch
 //    holds their relative rotation - the pressure carries the couple that keeps the faces
 //    parallel - so both turn alike, by (I1 + I2)^-1 (x2 - x1) x p, whatever the point
@@ -152,7 +155,8 @@ Contact make_contact(const ContactSide& side1, const ContactSide& side2,
 
 // The placement over a patch of at least two points (DESIGN.md §4's centre-of-pressure rule; see
 // the header comment): kFace or kSegment where the rule applies, else the corner landing first.
-// Returns the placement and sets c.point_W (and c.segment_dir_W). `foot_W`: the foot of the
+// Returns the placement and sets c.point_W (and c.segment_dir_W; a polygon landing along one of
+// its edges has c.patch replaced by that edge). `foot_W`: the foot of the
 // dynamic body's centre of mass on the contact plane.
 Placement place_over_patch(Contact& c, const BodyState& s1, const BodyState& s2, const Vec3& foot_W,
                            const Settings& settings);

@@ -88,17 +88,32 @@ TEST_CASE("contact: a block landing flat is resolved through its centre of mass"
   }
 }
 
-TEST_CASE("contact: a block rocking faster than the microcollision speed lands on a corner",
+TEST_CASE("contact: a block rocking faster than the microcollision speed lands on its leading edge",
           "[contact]") {
-  // Rocking at 5 rad/s about y: the +x corners approach at 0.5 m/s more than the -x ones.
+  // Rocking at 5 rad/s about y: the +x corners approach at 0.5 m/s more than the -x ones, and
+  // alike: the block lands along its +x edge, an edge on a face (not at one corner of it, whose
+  // friction would turn the block about x and z).
   const Posed posed = cube_over_ground(2e-5, Vec3(0, 0, -0.3), Vec3(0, 5, 0), false);
   const Contact c = posed.contact();
-  CHECK(c.placement == Placement::kPoint);
-  CHECK(c.point_W.x() == Approx(0.4).margin(1e-12));  // x0 + 0.1: (w x r)_z = -w_y r_x < 0
+  CHECK(c.placement == Placement::kSegment);
+  REQUIRE(c.patch.size() == 2);
+  CHECK(c.patch[0].x() == Approx(0.4).margin(1e-12));  // x0 + 0.1: (w x r)_z = -w_y r_x < 0
+  CHECK(c.patch[1].x() == Approx(0.4).margin(1e-12));
+  CHECK(std::abs(c.segment_dir_W.y()) == Approx(1.0).margin(1e-12));
+  CHECK(c.point_W.x() == Approx(0.4).margin(1e-12));
+  CHECK(c.point_W.y() == Approx(-0.2).margin(1e-12));  // the foot of the centre of mass
   const Resolution r = posed.resolve_it(Material{0.5, 0.0});
-  CHECK(r.outcome == PressureOutcome::kAtPoint);
-  CHECK_FALSE(r.record.centre_of_pressure);
-  CHECK(r.w1_W.y() != 5.0);  // the corner impulse turns the block
+  CHECK(r.record.centre_of_pressure);
+  CHECK(r.w1_W.y() != 5.0);  // the edge's impulse turns the block
+  CHECK(std::abs(r.w1_W.x()) <= 1e-12);
+  CHECK(std::abs(r.w1_W.z()) <= 1e-12);
+  CHECK(std::abs(r.v1_W.y()) <= 1e-12);
+  // Landing at u_n = -(0.3 + 5 * 0.1) = -0.8 m/s with e = 0: the whole edge leaves at the
+  // rebound floor, the microcollision speed.
+  for (const Vec3& q : c.patch) {
+    const Vec3 arm = q - Vec3(0.3, -0.2, 0.1 + 2e-5);
+    CHECK((r.v1_W + r.w1_W.cross(arm)).z() == Approx(c.v_micro).epsilon(1e-9));
+  }
 }
 
 TEST_CASE("contact: a disk rolling on one facet of its rim is rolling, not resting flat",
@@ -121,13 +136,15 @@ TEST_CASE("contact: a disk rolling on one facet of its rim is rolling, not resti
   {
     const Posed rolling(disk(Vec3(24 * h, 0, -0.01), Vec3(0, 24, 0)), test::fixed_ground());
     const Contact c = rolling.contact();
-    REQUIRE(c.patch.size() >= 3);
-    CHECK(c.placement == Placement::kPoint);
+    // It lands along the facet's leading edge (across the rim, along y), an edge on a face: the
+    // rotation about that edge, the rolling, stays free.
+    CHECK(c.placement == Placement::kSegment);
+    CHECK(std::abs(c.segment_dir_W.y()) == Approx(1.0).margin(1e-12));
     const Resolution r = rolling.resolve_it(Material{0.5, 0.0});
-    CHECK_FALSE(r.record.centre_of_pressure);
-    // Still rolling: the landing's friction at one point changes it by 0.3 % (measured); the
-    // rule, applied, removes every rotation in the contact plane, the rolling included.
+    // Still rolling: the landing changes it by 0.3 % (measured); the rule for a face resting on
+    // a face, applied, removes every rotation in the contact plane, the rolling included.
     CHECK(r.w1_W.y() > 23.5);
+    CHECK(std::abs(r.w1_W.x()) <= 1e-12);
   }
   {
     const Posed spinning(disk(Vec3(0, 0, -0.01), Vec3(0, 0, 20)), test::fixed_ground());
