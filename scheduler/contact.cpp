@@ -59,6 +59,65 @@ Vec3 fastest_approaching_corner(const std::vector<Vec3>& patch, const Vec3& n_W,
   return corner;
 }
 
+// A face resting on a face, the only place for the centre-of-pressure rule: the body's rotation
+// in the contact plane (rocking, or rolling about an edge of its patch) moves its patch relative
+// to its centre of mass no faster than the microcollision speed, max over the patch points q of
+// |w_in x (q - x)|. Judged by the patch's own size instead (|w_in| times the patch radius), a
+// disk rolling on one narrow facet of its rim (2 mm on a 64-gon) at 24 rad/s passed as resting
+// although its centre moves at 0.5 m/s, and the rule then took the rolling away (Euler's disk fell
+// flat in 0.065 s); the lever about the rotation axis, not the distance, keeps a long stick
+// rocking about its own axis judged by its thickness.
+bool face_rests_on_face(const std::vector<Vec3>& patch, const Vec3& x_dynamic_W, const Vec3& w_in_W,
+                        double rocking_limit) {
+  double speed = 0.0;
+  for (const Vec3& q : patch) speed = std::max(speed, w_in_W.cross(q - x_dynamic_W).norm());
+  return speed <= rocking_limit;
+}
+
+// A body turning about one edge of a polygon patch onto the rest of it (a prism rolling onto
+// its next face, a box tipping back onto its base, one at rest on a face it tips off) lands
+// along an edge: the corner landing first and the neighbour of it landing faster (or, as fast,
+// nearer the foot of the centre of mass). Both land at once unless one leads by more than the
+// microcollision speed (the see-saw along the edge, judged as for an edge on a face): the
+// impulse is then that of an edge on a face, over that edge. Returns true with c placed so
+// (kSegment, c.patch the edge, c.point_W the point of it nearest the foot), else false with c
+// unchanged. (At the first corner alone, with friction, a 128-gon's landings turned it about the
+// normal and about its rolling direction; the tilt grew 1e3 times every 0.1 s until the prism
+// hopped onto a corner and lost half its speed.)
+bool place_on_landing_edge(Contact& c, const BodyState& s1, const BodyState& s2,
+                           const Vec3& foot_W) {
+  const std::size_t n = c.patch.size();
+  if (n < 3) return false;
+  const Vec3 w_rel = c.dynamic1() ? Vec3(s1.w_W - s2.w_W) : Vec3(s2.w_W - s1.w_W);
+  const Vec3 first = fastest_approaching_corner(c.patch, c.n_W, s1, s2, foot_W);
+  const std::size_t f =
+      static_cast<std::size_t>(std::find(c.patch.begin(), c.patch.end(), first) - c.patch.begin());
+  auto u_n = [&](const Vec3& q) {
+    return (point_velocity_W(s1, q) - point_velocity_W(s2, q)).dot(c.n_W);
+  };
+  const std::size_t before = (f + n - 1) % n, after = (f + 1) % n;
+  const double u_before = u_n(c.patch[before]), u_after = u_n(c.patch[after]);
+  const double tie = 1e-12 * (1.0 + std::abs(u_before) + std::abs(u_after));
+  const bool take_before = u_before < u_after - tie ||
+                           (u_before <= u_after + tie &&
+                            (c.patch[before] - foot_W).norm() < (c.patch[after] - foot_W).norm());
+  // The edge in the patch's (counter-clockwise) order.
+  const std::vector<Vec3> edge = take_before ? std::vector<Vec3>{c.patch[before], c.patch[f]}
+                                             : std::vector<Vec3>{c.patch[f], c.patch[after]};
+  const Vec3 s = (edge[1] - edge[0]).normalized();
+  const Vec3 m = c.n_W.cross(s);
+  if (s.allFinite() &&
+      face_rests_on_face(edge, c.dynamic_x_W(), m * w_rel.dot(m), std::max(c.v_micro, 1e-9))) {
+    c.placement = Placement::kSegment;
+    c.patch = edge;
+    c.segment_dir_W = s;
+    const double length = (edge[1] - edge[0]).norm();
+    c.point_W = edge[0] + s * std::clamp((foot_W - edge[0]).dot(s), 0.0, length);
+    return true;
+  }
+  return false;
+}
+
 // Puts the contact at `tip_W`, the point of the patch boundary a body tips about when the patch
 // cannot carry the torque of the centre-of-pressure impulse (DESIGN.md §4). If the body turns so
 // fast that this point already separates, the corner landing first takes the collision: the
@@ -70,8 +129,16 @@ void place_tipping(Contact& c, const Vec3& tip_W, const BodyState& s1, const Bod
   c.placement = Placement::kPoint;
   place(c, tip_W);
   const Vec3 u_tip = contact_point_velocity_W(c.body1) - contact_point_velocity_W(c.body2);
-  if (!(u_tip.dot(c.n_W) < 0.0)) {
-    place(c, fastest_approaching_corner(c.patch, c.n_W, s1, s2, c.dynamic_x_W()));
+  // (At rest, within rounding of it, the tip point takes it: a prism at rest on a face of a
+  // slope it tips off, all its corners still, was struck at whichever corner rounding made first.)
+  const double scale =
+      contact_point_velocity_W(c.body1).norm() + contact_point_velocity_W(c.body2).norm();
+  if (u_tip.dot(c.n_W) > kVelocityRounding * scale) {
+    if (place_on_landing_edge(c, s1, s2, c.dynamic_x_W())) {
+      place(c, c.point_W);
+    } else {
+      place(c, fastest_approaching_corner(c.patch, c.n_W, s1, s2, c.dynamic_x_W()));
+    }
   }
 }
 
@@ -293,21 +360,6 @@ void place(Contact& c, const Vec3& point_W) {
   c.body2.r_W = point_W - c.n_W * height - c.x2_W;
 }
 
-// A face resting on a face, the only place for the centre-of-pressure rule: the body's rotation
-// in the contact plane (rocking, or rolling about an edge of its patch) moves its patch relative
-// to its centre of mass no faster than the microcollision speed, max over the patch points q of
-// |w_in x (q - x)|. Judged by the patch's own size instead (|w_in| times the patch radius), a
-// disk rolling on one narrow facet of its rim (2 mm on a 64-gon) at 24 rad/s passed as resting
-// although its centre moves at 0.5 m/s, and the rule then took the rolling away (Euler's disk fell
-// flat in 0.065 s); the lever about the rotation axis, not the distance, keeps a long stick
-// rocking about its own axis judged by its thickness.
-bool face_rests_on_face(const std::vector<Vec3>& patch, const Vec3& x_dynamic_W, const Vec3& w_in_W,
-                        double rocking_limit) {
-  double speed = 0.0;
-  for (const Vec3& q : patch) speed = std::max(speed, w_in_W.cross(q - x_dynamic_W).norm());
-  return speed <= rocking_limit;
-}
-
 Placement place_over_patch(Contact& c, const BodyState& s1, const BodyState& s2, const Vec3& foot_W,
                            const Settings& settings) {
   const BodyState& sd = c.dynamic1() ? s1 : s2;
@@ -349,39 +401,8 @@ Placement place_over_patch(Contact& c, const BodyState& s1, const BodyState& s2,
     return Placement::kSegment;
   }
   c.point_W = fastest_approaching_corner(c.patch, c.n_W, s1, s2, foot_W);
-  if (settings.centre_of_pressure && one_dynamic && c.patch.size() >= 3) {
-    // A body turning about one edge of its patch onto the rest of it (a prism rolling onto its
-    // next face, a box tipping back onto its base) lands along the opposite edge: the corner
-    // landing first and the neighbour of it landing faster (or, as fast, nearer the foot of the
-    // centre of mass). Both land at once unless one leads by more than the microcollision speed
-    // (the see-saw along the edge, judged as for an edge on a face): the impulse is then that of
-    // an edge on a face, over that edge. (At the first corner alone, with friction, a 128-gon's
-    // landings turned it about the normal and about its rolling direction; the tilt grew 1e3
-    // times every 0.1 s until the prism hopped onto a corner and lost half its speed.)
-    const std::size_t n = c.patch.size();
-    const std::size_t f = static_cast<std::size_t>(
-        std::find(c.patch.begin(), c.patch.end(), c.point_W) - c.patch.begin());
-    auto u_n = [&](const Vec3& q) {
-      return (point_velocity_W(s1, q) - point_velocity_W(s2, q)).dot(c.n_W);
-    };
-    const std::size_t before = (f + n - 1) % n, after = (f + 1) % n;
-    const double u_before = u_n(c.patch[before]), u_after = u_n(c.patch[after]);
-    const double tie = 1e-12 * (1.0 + std::abs(u_before) + std::abs(u_after));
-    const bool take_before = u_before < u_after - tie ||
-                             (u_before <= u_after + tie &&
-                              (c.patch[before] - foot_W).norm() < (c.patch[after] - foot_W).norm());
-    // The edge in the patch's (counter-clockwise) order.
-    const std::vector<Vec3> edge = take_before ? std::vector<Vec3>{c.patch[before], c.patch[f]}
-                                               : std::vector<Vec3>{c.patch[f], c.patch[after]};
-    const Vec3 s = (edge[1] - edge[0]).normalized();
-    const Vec3 m = c.n_W.cross(s);
-    if (s.allFinite() && face_rests_on_face(edge, x_dynamic, m * w_rel.dot(m), rocking_limit)) {
-      c.patch = edge;
-      c.segment_dir_W = s;
-      const double length = (edge[1] - edge[0]).norm();
-      c.point_W = edge[0] + s * std::clamp((foot_W - edge[0]).dot(s), 0.0, length);
-      return Placement::kSegment;
-    }
+  if (settings.centre_of_pressure && one_dynamic && place_on_landing_edge(c, s1, s2, foot_W)) {
+    return Placement::kSegment;
   }
   return Placement::kPoint;
 }

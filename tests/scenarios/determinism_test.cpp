@@ -59,7 +59,7 @@ const Expected kExpected[] = {
     {"balls_in_dish.json", 0x3bbd922e7cbed7caull},
     {"block_on_ramp_accelerating.json", 0x7baccee39ea4ad1eull},
     {"block_on_ramp_decelerating.json", 0x8369ce1c7eaca70aull},
-    {"bowling.json", 0x189a8c41f2ba4a5dull},
+    {"bowling.json", 0xc92d6111f73d4abcull},
     {"chain_of_balls.json", 0x7b57d4a42901664full},
     {"coins.json", 0x081234d710442197ull},
     {"cylinder_rolling_slope.json", 0x4bc4bf6ecb23e51aull},

@@ -1,13 +1,15 @@
 // The contact model through its value interface (scheduler/contact.hpp): hand-posed bodies, one
 // closest-feature query, then make_contact / approaching / resolve - no simulation. Each rule of
 // DESIGN.md §4's centre-of-pressure model against what it must do: a block landing flat is
-// resolved through its centre of mass and does not rock; a rocking block collides at the corner
-// landing first; a sliding block whose friction its patch cannot carry tips about its front edge;
-// an edge on a face holds only the rotation across the edge, moves along it to where the
-// impulse's torque vanishes, and tips past its end.
+// resolved through its centre of mass and does not rock; a rocking block collides along the edge
+// landing first; a prism at rest that tips off its face is struck mid-edge; a sliding block whose
+// friction its patch cannot carry tips about its front edge; an edge on a face holds only the
+// rotation across the edge, moves along it to where the impulse's torque vanishes, and tips past
+// its end.
 #include "scheduler/contact.hpp"
 
 #include "core/ballistic.hpp"
+#include "core/shape.hpp"
 #include "tests/support/test_world.hpp"
 
 #include <catch2/catch.hpp>
@@ -114,6 +116,34 @@ TEST_CASE("contact: a block rocking faster than the microcollision speed lands o
     const Vec3 arm = q - Vec3(0.3, -0.2, 0.1 + 2e-5);
     CHECK((r.v1_W + r.w1_W.cross(arm)).z() == Approx(c.v_micro).epsilon(1e-9));
   }
+}
+
+TEST_CASE("contact: a prism at rest on a slope it tips off is struck mid-edge, not at a corner",
+          "[contact]") {
+  // A 32-gon prism (circumradius 5 cm, 10 cm long, its axis along y) at rest on a face across a
+  // 10 degree slope, 2e-5 m above it: its line of action meets the slope 8.8 mm downhill of the
+  // face's centre, beyond the face's downhill edge (4.9 mm), so it tips about that edge. Every
+  // corner is still: the tip point, mid-edge, takes the impulse. (At whichever corner rounding
+  // made first, the friction turned the prism about the normal and its rolling direction: a
+  // 64-gon rolled off 6 mm sideways in 1.5 s.)
+  const int sides = 32;
+  const double th = 10.0 * kPi / 180.0, L = 0.05, a = kPi / sides;
+  const Vec3 n(std::sin(th), 0.0, std::cos(th));
+  const Quat q = test::about(Vec3::UnitY(), th) * test::about(Vec3::UnitX(), kPi / 2) *
+                 test::about(Vec3::UnitZ(), -kPi / 2 - a);
+  const Posed posed(test::dynamic_body("prism", ConvexPolyhedron::prism(L, 0.05, sides), 1.0,
+                                       (L * std::cos(a) + 2e-5) * n, q),
+                    test::fixed_body("slope", make_halfspace(n, 0.0)));
+  const Contact c = posed.contact();
+  REQUIRE(c.placement == Placement::kFace);
+  const Resolution r = posed.resolve_it(Material{1.0, 0.0});
+  CHECK(r.outcome == PressureOutcome::kTipped);
+  CHECK(std::abs(r.record.p_W.y()) <= 1e-12);
+  const Vec3 down(std::cos(th), 0.0, -std::sin(th));
+  CHECK(down.dot(r.record.p_W) == Approx(L * std::sin(a)).epsilon(1e-9));  // the downhill edge
+  CHECK(std::abs(r.w1_W.x()) <= 1e-12);
+  CHECK(std::abs(r.w1_W.z()) <= 1e-12);
+  CHECK(std::abs(r.v1_W.y()) <= 1e-12);
 }
 
 TEST_CASE("contact: a disk rolling on one facet of its rim is rolling, not resting flat",
