@@ -41,19 +41,26 @@ Vec3 exit_point(const std::vector<Vec3>& patch, const Vec3& n, const Vec3& insid
   return inside + s_exit * d;
 }
 
-// The patch point approaching fastest (the corner that lands first); among equals, the one
-// nearest `foot` (the foot of the dynamic body's centre of mass).
-Vec3 fastest_approaching_corner(const std::vector<Vec3>& patch, const Vec3& n_W,
-                                const BodyState& s1, const BodyState& s2, const Vec3& foot) {
+// The relative normal velocity of the bodies at the point q (< 0 approaching).
+double normal_velocity_at(const Vec3& q, const Vec3& n_W, const BodyState& s1,
+                          const BodyState& s2) {
+  return (point_velocity_W(s1, q) - point_velocity_W(s2, q)).dot(n_W);
+}
+
+// The index of the patch point approaching fastest (the corner that lands first); among equals,
+// the one nearest `foot` (the foot of the dynamic body's centre of mass).
+std::size_t fastest_approaching_corner(const std::vector<Vec3>& patch, const Vec3& n_W,
+                                       const BodyState& s1, const BodyState& s2, const Vec3& foot) {
   double best = kInfinity;
-  Vec3 corner = patch.front();
-  for (const Vec3& q : patch) {
-    const double u_n = (point_velocity_W(s1, q) - point_velocity_W(s2, q)).dot(n_W);
+  std::size_t corner = 0;
+  for (std::size_t i = 0; i < patch.size(); ++i) {
+    const Vec3& q = patch[i];
+    const double u_n = normal_velocity_at(q, n_W, s1, s2);
     const double tie = 1e-12 * (1.0 + std::abs(u_n));
     if (u_n < best - tie ||
-        (std::abs(u_n - best) <= tie && (q - foot).norm() < (corner - foot).norm())) {
+        (std::abs(u_n - best) <= tie && (q - foot).norm() < (patch[corner] - foot).norm())) {
       best = std::min(best, u_n);
-      corner = q;
+      corner = i;
     }
   }
   return corner;
@@ -84,19 +91,14 @@ bool face_rests_on_face(const std::vector<Vec3>& patch, const Vec3& x_dynamic_W,
 // unchanged. (At the first corner alone, with friction, a 128-gon's landings turned it about the
 // normal and about its rolling direction; the tilt grew 1e3 times every 0.1 s until the prism
 // hopped onto a corner and lost half its speed.)
-bool place_on_landing_edge(Contact& c, const BodyState& s1, const BodyState& s2,
+bool place_on_landing_edge(Contact& c, std::size_t f, const BodyState& s1, const BodyState& s2,
                            const Vec3& foot_W) {
   const std::size_t n = c.patch.size();
   if (n < 3) return false;
   const Vec3 w_rel = c.dynamic1() ? Vec3(s1.w_W - s2.w_W) : Vec3(s2.w_W - s1.w_W);
-  const Vec3 first = fastest_approaching_corner(c.patch, c.n_W, s1, s2, foot_W);
-  const std::size_t f =
-      static_cast<std::size_t>(std::find(c.patch.begin(), c.patch.end(), first) - c.patch.begin());
-  auto u_n = [&](const Vec3& q) {
-    return (point_velocity_W(s1, q) - point_velocity_W(s2, q)).dot(c.n_W);
-  };
   const std::size_t before = (f + n - 1) % n, after = (f + 1) % n;
-  const double u_before = u_n(c.patch[before]), u_after = u_n(c.patch[after]);
+  const double u_before = normal_velocity_at(c.patch[before], c.n_W, s1, s2);
+  const double u_after = normal_velocity_at(c.patch[after], c.n_W, s1, s2);
   const double tie = 1e-12 * (1.0 + std::abs(u_before) + std::abs(u_after));
   const bool take_before = u_before < u_after - tie ||
                            (u_before <= u_after + tie &&
@@ -131,14 +133,12 @@ void place_tipping(Contact& c, const Vec3& tip_W, const BodyState& s1, const Bod
   const Vec3 u_tip = contact_point_velocity_W(c.body1) - contact_point_velocity_W(c.body2);
   // (At rest, within rounding of it, the tip point takes it: a prism at rest on a face of a
   // slope it tips off, all its corners still, was struck at whichever corner rounding made first.)
-  const double scale =
-      contact_point_velocity_W(c.body1).norm() + contact_point_velocity_W(c.body2).norm();
-  if (u_tip.dot(c.n_W) > kVelocityRounding * scale) {
-    if (place_on_landing_edge(c, s1, s2, c.dynamic_x_W())) {
-      place(c, c.point_W);
-    } else {
-      place(c, fastest_approaching_corner(c.patch, c.n_W, s1, s2, c.dynamic_x_W()));
-    }
+  if (u_tip.dot(c.n_W) > rounding_speed(c)) {
+    const Vec3& foot = c.dynamic_x_W();
+    const std::size_t first = fastest_approaching_corner(c.patch, c.n_W, s1, s2, foot);
+    const Vec3 corner = c.patch[first];  // (an edge placed replaces the patch)
+    const bool on_edge = place_on_landing_edge(c, first, s1, s2, foot);
+    place(c, on_edge ? c.point_W : corner);
   }
 }
 
@@ -360,6 +360,11 @@ void place(Contact& c, const Vec3& point_W) {
   c.body2.r_W = point_W - c.n_W * height - c.x2_W;
 }
 
+double rounding_speed(const Contact& c) {
+  return kVelocityRounding *
+         (contact_point_velocity_W(c.body1).norm() + contact_point_velocity_W(c.body2).norm());
+}
+
 Placement place_over_patch(Contact& c, const BodyState& s1, const BodyState& s2, const Vec3& foot_W,
                            const Settings& settings) {
   const BodyState& sd = c.dynamic1() ? s1 : s2;
@@ -400,10 +405,12 @@ Placement place_over_patch(Contact& c, const BodyState& s1, const BodyState& s2,
     c.point_W = c.patch[0] + along * std::clamp((foot_W - c.patch[0]).dot(along), 0.0, length);
     return Placement::kSegment;
   }
-  c.point_W = fastest_approaching_corner(c.patch, c.n_W, s1, s2, foot_W);
-  if (settings.centre_of_pressure && one_dynamic && place_on_landing_edge(c, s1, s2, foot_W)) {
+  const std::size_t first = fastest_approaching_corner(c.patch, c.n_W, s1, s2, foot_W);
+  if (settings.centre_of_pressure && one_dynamic &&
+      place_on_landing_edge(c, first, s1, s2, foot_W)) {
     return Placement::kSegment;
   }
+  c.point_W = c.patch[first];
   return Placement::kPoint;
 }
 
@@ -497,18 +504,13 @@ bool approaching(const Contact& c) {
   if (c.g_n > 0.0 && (c.dynamic != DynamicSide::kBoth || c.held_acceleration)) {
     return c.u_n <= kRestingApproachSlack * c.v_micro;
   }
-  const double scale =
-      contact_point_velocity_W(c.body1).norm() + contact_point_velocity_W(c.body2).norm();
-  return c.u_n < -kVelocityRounding * scale;
+  return c.u_n < -rounding_speed(c);
 }
 
 bool patch_approaching(const Contact& c, const BodyState& s1, const BodyState& s2) {
-  const double scale =
-      contact_point_velocity_W(c.body1).norm() + contact_point_velocity_W(c.body2).norm();
+  const double rounding = rounding_speed(c);
   for (const Vec3& q : c.patch) {
-    if ((point_velocity_W(s1, q) - point_velocity_W(s2, q)).dot(c.n_W) < -kVelocityRounding * scale) {
-      return true;
-    }
+    if (normal_velocity_at(q, c.n_W, s1, s2) < -rounding) return true;
   }
   return false;
 }

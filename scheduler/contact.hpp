@@ -161,6 +161,10 @@ Contact make_contact(const ContactSide& side1, const ContactSide& side2,
 Placement place_over_patch(Contact& c, const BodyState& s1, const BodyState& s2, const Vec3& foot_W,
                            const Settings& settings);
 
+// The relative normal speed at the contact that is within rounding of the bodies' speeds there
+// (kVelocityRounding of their sum): slower than that, a contact neither approaches nor separates.
+double rounding_speed(const Contact& c);
+
 // True if the pair collides now: it approaches, or rests with gravity pressing it together
 // (a body left at rest in contact by an e = 0 collision must collide again, DESIGN.md §4).
 bool approaching(const Contact& c);

@@ -997,31 +997,26 @@ Island::PlanResult Island::plan(World& world, const std::vector<const ShapeGeome
           rise[k] = (now[i].slip_W + now[i].dw_W.cross(r)).dot(c.n_W);
           highest = std::max(highest, rise[k]);
         }
-        auto stays_down = [&](std::size_t k) {
-          return std::max(rise[k], rise[(k + 1) % n]) <= still;
-        };
-        bool some_down = false;
-        for (std::size_t k = 0; k < n; ++k) some_down = some_down || stays_down(k);
-        if (!some_down || !(highest > still)) continue;
-        // The edges that stay down (neither end rises); the body tips about the one the centre
-        // of pressure the whole face would need lies beyond, farthest. (Not the edge that
+        if (!(highest > still)) continue;
+        // Of the edges that stay down (neither end rises), the body tips about the one the
+        // centre of pressure the whole face would need lies beyond, farthest. (Not the edge that
         // sinks fastest: a prism landing one corner first has its other landing corner still
         // coming down, and its end edge, from that corner to the pivot's, sinks too.)
-        if (!statics) {
-          // That pressure at the velocities the projection below would leave (the rocking
-          // taken out), not at those of now: at those the rotation about the landing edge is
-          // in the problem, and a 128-gon rolling at 12.7 rad/s, near lift-off, found its
-          // pressure inside the face, was held flat and stopped dead.
-          std::vector<HeldBody> held = p.bodies;
-          project_held_velocities(held, p.contacts, still, separation, nullptr);
-          statics = solve_held(held, p.contacts);
-        }
-        if (statics->status != HeldStatus::kOk) continue;
-        const Vec2 cop = statics->forces[i].centre_of_pressure;
         int edge = -1;
         double beyond = 0.0;
         for (std::size_t k = 0; k < n; ++k) {
-          if (!stays_down(k)) continue;
+          if (std::max(rise[k], rise[(k + 1) % n]) > still) continue;
+          if (!statics) {
+            // That pressure at the velocities the projection below would leave (the rocking
+            // taken out), not at those of now: at those the rotation about the landing edge is
+            // in the problem, and a 128-gon rolling at 12.7 rad/s, near lift-off, found its
+            // pressure inside the face, was held flat and stopped dead.
+            std::vector<HeldBody> held = p.bodies;
+            project_held_velocities(held, p.contacts, still, separation, nullptr);
+            statics = solve_held(held, p.contacts);
+          }
+          if (statics->status != HeldStatus::kOk) break;
+          const Vec2 cop = statics->forces[i].centre_of_pressure;
           const Vec2& a = c.polygon[k];
           const Vec2 d = c.polygon[(k + 1) % n] - a;
           const double margin = cross2(d, cop - a) / d.norm();

@@ -133,9 +133,7 @@ const DistanceResult& Simulation::Impl::contact_result(const PairSet::Pair& p, c
 
 bool Simulation::Impl::lifting(const PairSet::Pair& p, const Contact& c, double t) {
   if (!(p.lifted && p.last_collision_t == t)) return false;
-  const double scale =
-      contact_point_velocity_W(c.body1).norm() + contact_point_velocity_W(c.body2).norm();
-  return !(c.u_n < -kVelocityRounding * scale);
+  return !(c.u_n < -rounding_speed(c));
 }
 
 ToiMotion Simulation::Impl::motion_for(BodyId id, const BodyState& s, const BodyState& other,
