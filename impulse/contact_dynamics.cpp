@@ -1,6 +1,7 @@
 #include "impulse/contact_dynamics.hpp"
 
 #include "impulse/contact_torque.hpp"
+#include "impulse/lcp.hpp"
 
 #include "core/convex_polygon.hpp"
 
@@ -289,6 +290,7 @@ class Assembly {
         return out;
       }
       if (out.residual > 1e-8) out.status = HeldStatus::kInconsistent;
+      if (out.status == HeldStatus::kOk && cod.rank() < m) nearest_feasible(cod, lambda);
       if (feasible_forces && out.status == HeldStatus::kOk) feasible_multipliers(lambda);
     }
     // Accelerations.
@@ -457,14 +459,7 @@ class Assembly {
     }
     if (!violated) return false;
     // The null space of the wrench map: lambda -> the net wrench on each body.
-    const Eigen::Index nb = static_cast<Eigen::Index>(bodies_.size());
-    MatX B = MatX::Zero(6 * nb, m);
-    for (Eigen::Index j = 0; j < m; ++j) {
-      const Row& r = rows_[static_cast<std::size_t>(j)];
-      for (int q = 0; q < 2; ++q) {
-        if (r.body[q] >= 0) B.block<6, 1>(6 * r.body[q], j) += r.W[q];
-      }
-    }
+    const MatX B = wrench_map();
     Eigen::ColPivHouseholderQR<MatX> qr(B.transpose());
     const Eigen::Index rank = qr.rank();
     const Eigen::Index k = m - rank;
@@ -519,6 +514,105 @@ class Assembly {
     }
     glp_delete_prob(lp);
     return changed;
+  }
+
+  // The net wrench on each body per unit multiplier of each row (6 per body).
+  MatX wrench_map() const {
+    const Eigen::Index m = static_cast<Eigen::Index>(rows_.size());
+    const Eigen::Index nb = static_cast<Eigen::Index>(bodies_.size());
+    MatX B = MatX::Zero(6 * nb, m);
+    for (Eigen::Index j = 0; j < m; ++j) {
+      const Row& r = rows_[static_cast<std::size_t>(j)];
+      for (int q = 0; q < 2; ++q) {
+        if (r.body[q] >= 0) B.block<6, 1>(6 * r.body[q], j) += r.W[q];
+      }
+    }
+    return B;
+  }
+
+  // The point of {y : C y >= d} nearest the origin: for one column an interval; otherwise the
+  // LCP of its dual (y = C^T mu, mu >= 0
+  // complementary to C C^T mu - d >= 0, positive semi-definite: Lemke) over the inequalities y
+  // breaks, those the answer still breaks added until none is (the nearest point of a larger set
+  // that lies in the smaller one is its nearest point too). nullopt where an LCP has no solution.
+  static std::optional<VecX> nearest_point(const MatX& C, const VecX& d) {
+    if (C.cols() == 1) {
+      // One free direction (a ball in a corner): the interval of y meeting every inequality,
+      // and its point nearest zero.
+      double lo = -INFINITY, hi = INFINITY;
+      for (Eigen::Index i = 0; i < C.rows(); ++i) {
+        if (C(i, 0) > 0.0) {
+          lo = std::max(lo, d(i) / C(i, 0));
+        } else if (C(i, 0) < 0.0) {
+          hi = std::min(hi, d(i) / C(i, 0));
+        } else if (d(i) > 0.0) {
+          return std::nullopt;
+        }
+      }
+      if (!(lo <= hi)) return std::nullopt;
+      return VecX::Constant(1, std::clamp(0.0, lo, hi));
+    }
+    const double tolerance = 1e-12 * (d.cwiseAbs().maxCoeff() + 1e-300);
+    std::vector<Eigen::Index> subset;
+    VecX y = VecX::Zero(C.cols());
+    for (int round = 0; round < 50; ++round) {
+      const VecX slack = C * y - d;
+      bool added = false;
+      for (Eigen::Index i = 0; i < slack.size(); ++i) {
+        if (slack(i) < -tolerance && std::find(subset.begin(), subset.end(), i) == subset.end()) {
+          subset.push_back(i);
+          added = true;
+        }
+      }
+      if (!added) return y;
+      const Eigen::Index n = static_cast<Eigen::Index>(subset.size());
+      MatX Cs(n, C.cols());
+      VecX ds(n);
+      for (Eigen::Index i = 0; i < n; ++i) {
+        Cs.row(i) = C.row(subset[static_cast<std::size_t>(i)]);
+        ds(i) = d(subset[static_cast<std::size_t>(i)]);
+      }
+      const LcpSolution lcp = solve_lcp(Cs * Cs.transpose(), -ds);
+      if (!lcp.solved) return std::nullopt;
+      y = Cs.transpose() * lcp.z;
+    }
+    return std::nullopt;
+  }
+
+  // Where the rows are dependent (A singular) and a multiplier combination leaves every row's
+  // value alone but not the bodies' accelerations, the accelerations are not unique: a ball
+  // wedged between a floor and a wall, both sticking, may be squeezed between them by any
+  // amount, and the rolling resistance or sliding friction that scales with its normal forces
+  // turns it accordingly. Among them, the multipliers nearest the least-norm ones (in their own
+  // norm) that meet every inequality (inequalities(): N >= 0, pressure in the patch, reactions
+  // within their bounds) are taken - the least squeeze that keeps every contact in its cone,
+  // continuous in the state, so an integrated motion follows it. Where no multipliers meet them
+  // all, or the accelerations are unique (the redundancy is a pure internal force:
+  // feasible_multipliers' case), lambda stays.
+  void nearest_feasible(const Eigen::CompleteOrthogonalDecomposition<MatX>& cod,
+                        VecX& lambda) const {
+    const std::vector<Inequality> g = inequalities();
+    const Eigen::Index ng = static_cast<Eigen::Index>(g.size());
+    MatX G = MatX::Zero(ng, lambda.size());
+    for (Eigen::Index i = 0; i < ng; ++i) {
+      for (const auto& [index, coefficient] : g[static_cast<std::size_t>(i)]) {
+        G(i, index) += coefficient;
+      }
+    }
+    const VecX margin = G * lambda;
+    if (!margin.allFinite() || margin.minCoeff() >= 0.0) return;
+    // A P = Q [T11 0; 0 0] Z (Eigen's complete orthogonal decomposition): the null space of A
+    // is P times the last m - rank rows of Z, transposed (orthonormal).
+    const Eigen::Index m = lambda.size(), rank = cod.rank();
+    const MatX Z = cod.colsPermutation() * MatX(cod.matrixZ().bottomRows(m - rank).transpose());
+    if (Z.cols() == 0 || !Z.allFinite()) return;
+    const MatX B = wrench_map();
+    if (!((B * Z).norm() > 1e-9 * B.norm())) return;  // the accelerations are unique
+    // The smallest move y along the null space with G (lambda + Z y) >= 0.
+    const std::optional<VecX> y = nearest_point(G * Z, -margin);
+    if (!y) return;
+    const VecX moved = lambda + Z * *y;
+    if (moved.allFinite()) lambda = moved;
   }
 
   Vec6 apply_inverse_mass(int body, const Vec6& w) const {

@@ -522,3 +522,62 @@ TEST_CASE("held: Euler's disk rolling on its rim at its steady motion keeps it",
     CHECK(modes.solution.forces[0].friction.norm() <= 1e-12 * m * kG);
   }
 }
+
+TEST_CASE(
+    "held: a ball wedged in a corner, both contacts sticking, is squeezed no more than its cones "
+    "need",
+    "[impulse][held]") {
+  // A ball on a floor against a wall at x = R, pushed into the wall, turning about the line
+  // through its two contact points (neither slips). Its rows are dependent (the squeeze between
+  // the two points is free) and the rolling resistance, d N at each contact, turns it with the
+  // squeeze: the accelerations are not unique. The least-norm multipliers need more friction at
+  // the wall than mu N; the solution must be one whose forces meet every cone, and the rolling
+  // resistance must slow the turning.
+  const double R = 0.025, m = 0.1;
+  for (const double push : {0.2, 0.5, 1.0}) {
+    for (const double d : {1e-3, 5e-3}) {
+      for (const double w : {-20.0, 20.0}) {
+        CAPTURE(push, d, w);
+        const Vec3 axis = Vec3(1, 0, 1).normalized();
+        const Vec3 centre(0, 0, R);
+        const Vec3 p_floor(0, 0, 0), p_wall(R, 0, R);
+        HeldBody b = ball(m, R, centre, (w * axis).cross(centre - p_floor), w * axis);
+        b.force_W += Vec3(push, 0.3 * push, 0);
+        std::vector<HeldBody> bodies = {b};
+        HeldContact floor = on_plane(0, p_floor, Vec3::UnitZ(), Vec3::UnitX(), 0.5);
+        HeldContact wall = on_plane(0, p_wall, -Vec3::UnitX(), Vec3::UnitY(), 0.5);
+        for (HeldContact* k : {&floor, &wall}) {
+          k->sphere_radius = R;
+          k->rolling_resistance = d;
+        }
+        std::vector<HeldContact> contacts = {floor, wall};
+        const HeldModes modes = choose_held_modes(bodies, contacts, 1e-9, 1e-9);
+        REQUIRE(modes.solution.status == HeldStatus::kOk);
+        CHECK(modes.converged);
+        CHECK(modes.released.empty());
+        const HeldSolution& s = modes.solution;
+        for (std::size_t i = 0; i < 2; ++i) {
+          CAPTURE(i);
+          CHECK(contacts[i].sticks);
+          CHECK_FALSE(contacts[i].roll_sticks);
+          CHECK(s.forces[i].normal >= 0.0);
+          CHECK(s.forces[i].friction.norm() <=
+                contacts[i].friction * s.forces[i].normal * (1 + 1e-9));
+          CHECK(s.motion[i].slip_rate_W.norm() <= 1e-9);
+        }
+        // It turns about the line through its contacts as a pendulum on that axis: I_L alpha =
+        // the applied torque about it plus the rolling resistance's, which opposes the turning.
+        const Vec3 arm = centre - p_floor;
+        const double I_L = 0.4 * m * R * R + m * arm.cross(axis).squaredNorm();
+        const double applied = arm.cross(b.force_W).dot(axis);
+        double resisting = 0.0;
+        for (std::size_t i = 0; i < 2; ++i) {
+          const Vec2& t = s.forces[i].rolling;
+          resisting += (t.x() * contacts[i].t1_W + t.y() * contacts[i].t2_W).dot(axis);
+        }
+        CHECK(resisting * w < 0.0);
+        CHECK(s.alpha_W[0].dot(axis) == Approx((applied + resisting) / I_L).epsilon(1e-9));
+      }
+    }
+  }
+}

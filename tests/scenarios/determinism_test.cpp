@@ -56,7 +56,7 @@ struct Expected {
 // The committed final-state hashes of the shipped scenes.
 const Expected kExpected[] = {
     {"ball_on_platter.json", 0x05f50177987f5e0bull},
-    {"balls_in_dish.json", 0x3bbd922e7cbed7caull},
+    {"balls_in_dish.json", 0x44719c8094cef80bull},
     {"block_on_ramp_accelerating.json", 0x7baccee39ea4ad1eull},
     {"block_on_ramp_decelerating.json", 0x8369ce1c7eaca70aull},
     {"bowling.json", 0xc92d6111f73d4abcull},
