@@ -531,10 +531,10 @@ class Assembly {
   }
 
   // The point of {y : C y >= d} nearest the origin: for one column an interval; otherwise the
-  // LCP of its dual (y = C^T mu, mu >= 0
-  // complementary to C C^T mu - d >= 0, positive semi-definite: Lemke) over the inequalities y
-  // breaks, those the answer still breaks added until none is (the nearest point of a larger set
-  // that lies in the smaller one is its nearest point too). nullopt where an LCP has no solution.
+  // LCP of its dual (y = C^T mu, mu >= 0 complementary to C C^T mu - d >= 0, positive
+  // semi-definite: Lemke) over the inequalities y breaks, those the answer still breaks added
+  // until none is (the nearest point of a larger set that lies in the smaller one is its nearest
+  // point too). nullopt where an LCP has no solution or 50 rounds do not settle it.
   static std::optional<VecX> nearest_point(const MatX& C, const VecX& d) {
     if (C.cols() == 1) {
       // One free direction (a ball in a corner): the interval of y meeting every inequality,
