@@ -581,3 +581,61 @@ TEST_CASE(
     }
   }
 }
+
+TEST_CASE("held: two dynamic spheres' slip rate is the derivative of their slip along the motion",
+          "[impulse][held]") {
+  // A ball sliding over another, both free and turning: the problem's slip rate (ds/dt following
+  // the contact point, with the normal's rate) against a central difference of the slip over the
+  // motion its accelerations give (the contact rebuilt from the centres at t +- dt).
+  const double Rm = 0.025, Rs = 0.03;
+  for (int trial = 0; trial < 4; ++trial) {
+    CAPTURE(trial);
+    const Vec3 xs(0.01 * trial, 0, 0.03);
+    const Vec3 n0 = Vec3(0.3 + 0.1 * trial, -0.2, 1.0 - 2.0 * (trial % 2)).normalized();
+    std::vector<HeldBody> bodies = {
+        ball(0.1, Rm, xs + (Rm + Rs) * n0, Vec3(0.3, -0.2, 0.1), Vec3(5, -7, 3 * trial)),
+        ball(0.2, Rs, xs, Vec3(-0.1, 0.2, 0.05), Vec3(-4, 2, 8))};
+    const Vec3 rel = bodies[0].v_W - bodies[1].v_W;
+    bodies[0].v_W -= rel.dot(n0) * n0;  // touching, not approaching
+    auto contact_of = [&](const std::vector<HeldBody>& b) {
+      HeldContact k;
+      k.mover = 0;
+      k.support = 1;
+      const Vec3 d = b[0].x_W - b[1].x_W;
+      k.n_W = d.normalized();
+      k.t1_W = k.n_W.unitOrthogonal();
+      k.t2_W = k.n_W.cross(k.t1_W);
+      k.c_W = b[1].x_W + Rs * k.n_W;
+      k.sphere_radius = Rm;
+      k.has_n_dot = true;
+      const Vec3 dv = b[0].v_W - b[1].v_W;
+      k.n_dot_W = (dv - dv.dot(k.n_W) * k.n_W) / d.norm();
+      k.friction = 0.5;
+      k.rolling_resistance = 1e-3;
+      k.sticks = false;
+      k.roll_sticks = false;
+      return k;
+    };
+    std::vector<HeldContact> contacts = {contact_of(bodies)};
+    const HeldContactMotion now = held_velocities(bodies, contacts)[0];
+    const HeldContact& k = contacts[0];
+    contacts[0].slip_dir = Vec2(now.slip_W.dot(k.t1_W), now.slip_W.dot(k.t2_W)).normalized();
+    contacts[0].roll_dir = Vec2(now.dw_W.dot(k.t1_W), now.dw_W.dot(k.t2_W)).normalized();
+    const HeldSolution s = solve_held(bodies, contacts);
+    REQUIRE(s.status == HeldStatus::kOk);
+    auto slip_at = [&](double h) {
+      std::vector<HeldBody> b = bodies;
+      for (std::size_t i = 0; i < b.size(); ++i) {
+        b[i].x_W += bodies[i].v_W * h + 0.5 * s.a_W[i] * h * h;
+        b[i].v_W += s.a_W[i] * h;
+        b[i].w_W += s.alpha_W[i] * h;
+      }
+      return held_velocities(b, {contact_of(b)})[0].slip_W;
+    };
+    const double dt = 1e-6;
+    const Vec3 difference = (slip_at(dt) - slip_at(-dt)) / (2.0 * dt);
+    CHECK((difference - s.motion[0].slip_rate_W).norm() <= 1e-6 * (1.0 + difference.norm()));
+    // And the gap holds: its second derivative, n . ds/dt + dn/dt . s, is zero.
+    CHECK(std::abs(s.motion[0].slip_rate_W.dot(k.n_W) + k.n_dot_W.dot(now.slip_W)) <= 1e-9);
+  }
+}
