@@ -54,7 +54,7 @@ LcpSolution solve_lcp(const Eigen::MatrixXd& M, const Eigen::VectorXd& q) {
       const Eigen::Index col = key < 0 ? rhs : key;
       double best = INFINITY;
       for (Eigen::Index i : ties) best = std::min(best, T(i, col) / T(i, entering));
-      const double within = 1e-12 * (std::abs(best) + 1e-300) + (key < 0 ? 1e-300 : 0.0);
+      const double within = 1e-12 * std::abs(best);
       std::vector<Eigen::Index> kept;
       for (Eigen::Index i : ties) {
         if (T(i, col) / T(i, entering) <= best + within) kept.push_back(i);

@@ -742,6 +742,14 @@ std::vector<BodyState> unpack(const dopri5::State& y, double t) {
   return out;
 }
 
+// How far a polygon patch's centre of pressure lies inside its edge k, from vertex k to k + 1
+// (counter-clockwise: negative beyond it) [m].
+double inside_edge(const std::vector<Vec2>& polygon, std::size_t k, const Vec2& cop) {
+  const Vec2& a = polygon[k];
+  const Vec2 d = polygon[(k + 1) % polygon.size()] - a;
+  return cross2(d, cop - a) / d.norm();
+}
+
 }  // namespace
 
 int Island::index_of(BodyId id) const {
@@ -1016,10 +1024,7 @@ Island::PlanResult Island::plan(World& world, const std::vector<const ShapeGeome
             statics = solve_held(held, p.contacts);
           }
           if (statics->status != HeldStatus::kOk) break;
-          const Vec2 cop = statics->forces[i].centre_of_pressure;
-          const Vec2& a = c.polygon[k];
-          const Vec2 d = c.polygon[(k + 1) % n] - a;
-          const double margin = cross2(d, cop - a) / d.norm();
+          const double margin = inside_edge(c.polygon, k, statics->forces[i].centre_of_pressure);
           if (margin < beyond) {
             beyond = margin;
             edge = static_cast<int>(k);
@@ -1081,9 +1086,7 @@ Island::PlanResult Island::plan(World& world, const std::vector<const ShapeGeome
         int nearest = 0;
         double margin = kInfinity;
         for (std::size_t e = 0; e < t.polygon.size(); ++e) {
-          const Vec2& a = t.polygon[e];
-          const Vec2 d = t.polygon[(e + 1) % t.polygon.size()] - a;
-          const double m = cross2(d, cop - a) / d.norm();
+          const double m = inside_edge(t.polygon, e, cop);
           if (m < margin) {
             margin = m;
             nearest = static_cast<int>(e);
@@ -1535,9 +1538,7 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
       if (c.patch == PatchKind::kPolygon) {
         double margin = kInfinity;
         for (std::size_t k = 0; k < c.polygon.size(); ++k) {
-          const Vec2& a = c.polygon[k];
-          const Vec2 d = c.polygon[(k + 1) % c.polygon.size()] - a;
-          margin = std::min(margin, cross2(d, cop - a) / d.norm());
+          margin = std::min(margin, inside_edge(c.polygon, k, cop));
         }
         e[1].value = margin;
       } else if (c.patch == PatchKind::kSegment) {
