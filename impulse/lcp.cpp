@@ -18,7 +18,9 @@ LcpSolution solve_lcp(const Eigen::MatrixXd& M, const Eigen::VectorXd& q) {
   // Tableau rows: w - M z - 1 z0 = q. Columns: w (0..n-1), z (n..2n-1), z0 (2n), right side (2n+1).
   // The w columns hold the basis inverse throughout (the lexicographic keys).
   const Eigen::Index z0 = 2 * n, rhs = 2 * n + 1;
-  Eigen::MatrixXd T = Eigen::MatrixXd::Zero(n, 2 * n + 2);
+  // Row-major: a pivot works along rows, which are then contiguous.
+  using Tableau = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  Tableau T = Tableau::Zero(n, 2 * n + 2);
   T.leftCols(n).setIdentity();
   T.middleCols(n, n) = -M;
   T.col(z0).setConstant(-1.0);
