@@ -206,6 +206,11 @@ VolumeIntegrals shape_volume_integrals(const Shape& shape) {
   }
   if (const auto* poly = std::get_if<ConvexPolyhedron>(&shape)) return volume_integrals(*poly);
   if (const auto* e = std::get_if<Ellipsoid>(&shape)) {
+    if (e->com_offset != 0.0) {
+      throw InputError("shape",
+                       "an ellipsoid whose centre of mass is off its centre: a uniform density "
+                       "cannot give its mass properties; give its mass and inertia");
+    }
     // V = 4/3 pi abc; I_xx = V (b^2 + c^2) / 5 and cyclically.
     const double kPi = 3.14159265358979323846;
     const Vec3 sq = e->semi_axes_M.cwiseAbs2();

@@ -440,13 +440,18 @@ double positive_finite(const char* name, double value) {
 
 }  // namespace
 
-Ellipsoid make_ellipsoid(const Vec3& semi_axes_M) {
+Ellipsoid make_ellipsoid(const Vec3& semi_axes_M, double com_offset) {
   for (int i = 0; i < 3; ++i) {
     if (!(std::isfinite(semi_axes_M[i]) && semi_axes_M[i] > 0.0)) {
       throw InputError("semi_axes", "must be positive and finite, got " + format_vec(semi_axes_M));
     }
   }
-  return Ellipsoid{semi_axes_M};
+  if (!(std::isfinite(com_offset) && std::abs(com_offset) < semi_axes_M.z())) {
+    throw InputError("com_offset", "must be finite and smaller in size than the z semi-axis " +
+                                       std::to_string(semi_axes_M.z()) + ", got " +
+                                       std::to_string(com_offset));
+  }
+  return Ellipsoid{semi_axes_M, com_offset};
 }
 
 Cylinder make_cylinder(double radius, double half_height) {
@@ -477,8 +482,8 @@ Vec3 smooth_support_M(const Shape& shape, const Vec3& d) {
     // x = A^2 d / |A d| with A = diag(a) maximises d . x over x^T A^-2 x <= 1.
     const Vec3 ad = e->semi_axes_M.cwiseProduct(d);
     const double length = ad.norm();
-    if (!(length > 0.0)) return Vec3::Zero();
-    return e->semi_axes_M.cwiseProduct(ad) / length;
+    if (!(length > 0.0)) return e->centre_M();
+    return e->centre_M() + e->semi_axes_M.cwiseProduct(ad) / length;
   }
   if (const auto* c = std::get_if<Cylinder>(&shape)) {
     const double radial = std::hypot(d.x(), d.y());
@@ -605,7 +610,12 @@ double max_radius(const Shape& shape) {
                  [](const ConvexPolyhedron& p) { return p.max_radius(); },
                  [](const Halfspace&) { return kInfinity; },
                  [](const Compound& c) { return compound_max_radius(c); },
-                 [](const Ellipsoid& e) { return e.semi_axes_M.maxCoeff(); },
+                 [](const Ellipsoid& e) {
+                   // |c + x|^2 <= a_max^2 + 2 |o| a_z + o^2 for x on the centred ellipsoid and
+                   // c = (0, 0, -o): exact for equal semi-axes, a bound otherwise.
+                   const double a = e.semi_axes_M.maxCoeff(), o = std::abs(e.com_offset);
+                   return o == 0.0 ? a : std::sqrt(a * a + 2.0 * o * e.semi_axes_M.z() + o * o);
+                 },
                  [](const Cylinder& c) { return std::hypot(c.radius, c.half_height); },
                  [](const Capsule& c) { return c.half_length + c.radius; },
                  [](const LoadedBall& b) { return b.radius + std::abs(b.com_offset); }},
@@ -661,8 +671,9 @@ Aabb bounding_box_W(const Shape& shape, const Vec3& p_W, const Quat& q_WM) {
     // Exact: the support along world axis i reaches |R_i. diag(a)| (row i of R diag(a)).
     const Mat3 RA = q_WM.toRotationMatrix() * e->semi_axes_M.asDiagonal();
     const Vec3 half = RA.rowwise().norm();
-    box.min_W = p_W - half;
-    box.max_W = p_W + half;
+    const Vec3 centre_W = p_W + q_WM * e->centre_M();
+    box.min_W = centre_W - half;
+    box.max_W = centre_W + half;
   } else if (const auto* c = std::get_if<Cylinder>(&shape)) {
     // Exact: a disk of radius r with unit normal k spans r sqrt(1 - k_i^2) along axis i, and the
     // two caps are h |k_i| either side of the centre.

@@ -19,9 +19,14 @@ struct Sphere {
 // Smooth convex shapes (issue 16), each centred so that the modelling frame's origin is the centre
 // of mass. Build them with the validated make_* functions below.
 
-// The solid { x : sum (x_i / a_i)^2 <= 1 }, semi-axes a = semi_axes_M along M's axes [m].
+// The solid { x : sum ((x - centre_M())_i / a_i)^2 <= 1 }, semi-axes a = semi_axes_M along M's
+// axes [m]. Centred (com_offset 0) unless its centre of mass lies com_offset along +z from its
+// geometric centre, |com_offset| < a_z (a rattleback's, Kane & Levinson's: below it); then, as for
+// a loaded ball, its mass and inertia are given.
 struct Ellipsoid {
   Vec3 semi_axes_M = Vec3::Ones();
+  double com_offset = 0.0;  // [m]
+  Vec3 centre_M() const { return Vec3(0.0, 0.0, -com_offset); }
 };
 
 // A round cylinder, axis along M's z: { x : x^2 + y^2 <= radius^2, |z| <= half_height }. A disk or
@@ -133,7 +138,7 @@ Sphere make_sphere(double radius);
 Halfspace make_halfspace(const Vec3& normal_M, double offset);
 // Positive finite semi-axes / radius / half-height / half-length, and |com_offset| < radius.
 // Throw InputError naming the argument.
-Ellipsoid make_ellipsoid(const Vec3& semi_axes_M);
+Ellipsoid make_ellipsoid(const Vec3& semi_axes_M, double com_offset = 0.0);
 Cylinder make_cylinder(double radius, double half_height);
 Capsule make_capsule(double radius, double half_length);
 LoadedBall make_loaded_ball(double radius, double com_offset);

@@ -89,7 +89,7 @@ std::shared_ptr<const Shape> parse_shape(const Reader& r, const json& value,
       return x;
     };
     if (type == "ellipsoid") {
-      r.only_keys(value, path, {"type", "semi_axes"});
+      r.only_keys(value, path, {"type", "semi_axes", "com_offset"});
       const Vec3 a = r.vec3(r.required(value, path, "semi_axes"), path + "/semi_axes");
       for (int i = 0; i < 3; ++i) {
         if (!(a[i] >= kMinSize && a[i] <= kMaxSize && a[i] >= kMinAspect * a.maxCoeff())) {
@@ -98,7 +98,15 @@ std::shared_ptr<const Shape> parse_shape(const Reader& r, const json& value,
                            ", and at least 1e-6 of the largest");
         }
       }
-      return std::make_shared<const Shape>(make_ellipsoid(a));
+      double offset = 0.0;
+      if (value.contains("com_offset")) {
+        offset = r.number(value["com_offset"], path + "/com_offset");
+        if (!(std::abs(offset) < a.z())) {
+          r.fail_value(path + "/com_offset", value["com_offset"],
+                       "an offset of the centre of mass smaller in size than the z semi-axis");
+        }
+      }
+      return std::make_shared<const Shape>(make_ellipsoid(a, offset));
     }
     if (type == "cylinder" || type == "capsule") {
       // A radius and a length along z, neither below kMinAspect of the other.
@@ -174,6 +182,10 @@ std::shared_ptr<const Shape> parse_shape(const Reader& r, const json& value,
           r.fail_value(part_path + "/shape/type", part_type,
                        "a convex part: \"sphere\", \"box\", \"prism\", \"convex\", "
                        "\"ellipsoid\", \"cylinder\" or \"capsule\"");
+        }
+        if (part_type == "ellipsoid" && part_shape.contains("com_offset")) {
+          r.fail_value(part_path + "/shape/com_offset", part_shape["com_offset"],
+                       "no centre-of-mass offset on a compound part (place it by \"position\")");
         }
         part.shape = parse_shape(r, part_shape, part_path + "/shape", /*allow_unbounded=*/false);
         if (parts[i].contains("position")) {
@@ -329,6 +341,13 @@ Body parse_body(const Reader& r, const json& value, const std::string& path) {
     const bool loaded = std::holds_alternative<LoadedBall>(*body.shape);
     const bool ellipsoid = std::holds_alternative<Ellipsoid>(*body.shape);
     const bool given = value.contains("inertia");
+    const auto* e = std::get_if<Ellipsoid>(body.shape.get());
+    if (e && e->com_offset != 0.0 && !given) {
+      r.fail(path,
+             "an ellipsoid with a \"com_offset\" needs \"mass\" (kg) and \"inertia\" (about its "
+             "centre of mass, kg m^2): uniform density cannot put its centre of mass off its "
+             "centre");
+    }
     if (loaded && !given) {
       r.fail(path,
              "a loaded ball needs \"mass\" (kg) and \"inertia\" (its principal moments "

@@ -548,4 +548,11 @@ TEST_CASE("Smooth shapes: closed-form mass properties against inscribed hulls") 
         mass_properties_from_inertia(1.0, Vec3(0.004, 0.004, 0.0035).asDiagonal());
     CHECK(m.principal_moments.x() == 0.0035);
   }
+  SECTION("nor has an ellipsoid whose centre of mass is off its centre") {
+    const Shape e = make_ellipsoid(Vec3(0.2, 0.03, 0.02), -0.01);
+    CHECK_THAT(input_error([&] { mass_properties_from_density(e, 1000.0); }),
+               Catch::Contains("centre of mass is off its centre"));
+    CHECK_THAT(input_error([&] { mass_properties_from_mass(e, 1.0); }),
+               Catch::Contains("centre of mass is off its centre"));
+  }
 }

@@ -241,7 +241,7 @@ namespace {
 // Inside tests of the smooth shapes (in M), independent of their support functions.
 double smooth_excess(const Shape& shape, const Vec3& x) {
   if (const auto* e = std::get_if<Ellipsoid>(&shape)) {
-    return x.cwiseQuotient(e->semi_axes_M).norm() - 1.0;  // relative
+    return (x - e->centre_M()).cwiseQuotient(e->semi_axes_M).norm() - 1.0;  // relative
   }
   if (const auto* c = std::get_if<Cylinder>(&shape)) {
     return std::max(std::hypot(x.x(), x.y()) - c->radius, std::abs(x.z()) - c->half_height);
@@ -259,6 +259,7 @@ double smooth_excess(const Shape& shape, const Vec3& x) {
 std::vector<Vec3> smooth_surface_samples(const Shape& shape, int count, std::mt19937_64& rng) {
   Vec3 centre = Vec3::Zero();
   if (const auto* b = std::get_if<LoadedBall>(&shape)) centre = b->centre_M();
+  if (const auto* e = std::get_if<Ellipsoid>(&shape)) centre = e->centre_M();
   std::vector<Vec3> out;
   for (int k = 0; k < count; ++k) {
     const Vec3 u = random_unit(rng);
@@ -286,6 +287,14 @@ TEST_CASE("Smooth shapes: validated builders name the bad argument") {
   CHECK_THAT(input_error([] { make_loaded_ball(1.0, 1.0); }), Catch::Contains("com_offset"));
   CHECK_THAT(input_error([] { make_loaded_ball(1.0, -1.5); }), Catch::Contains("com_offset"));
   CHECK(input_error([] { make_loaded_ball(1.0, -0.5); }) == "accepted");
+  // An ellipsoid's centre of mass lies within its z semi-axis of its centre.
+  CHECK_THAT(input_error([] { make_ellipsoid(Vec3(3, 2, 1), 1.0); }),
+             Catch::Contains("com_offset"));
+  CHECK_THAT(input_error([] { make_ellipsoid(Vec3(3, 2, 1), -1.5); }),
+             Catch::Contains("com_offset"));
+  CHECK_THAT(input_error([] { make_ellipsoid(Vec3(3, 2, 1), std::nan("")); }),
+             Catch::Contains("com_offset"));
+  CHECK(input_error([] { make_ellipsoid(Vec3(3, 2, 1), -0.9); }) == "accepted");
   // Smooth shapes may be compound parts.
   CompoundPart part;
   part.shape = std::make_shared<const Shape>(make_cylinder(1.0, 0.1));
@@ -295,7 +304,8 @@ TEST_CASE("Smooth shapes: validated builders name the bad argument") {
 TEST_CASE("Smooth shapes: exact support, radius and tight world box against brute force") {
   std::mt19937_64 rng(1601);
   const std::vector<Shape> shapes = {make_ellipsoid(Vec3(0.3, 0.5, 0.7)), make_cylinder(0.4, 0.05),
-                                     make_capsule(0.2, 0.35), make_loaded_ball(0.25, 0.07)};
+                                     make_capsule(0.2, 0.35), make_loaded_ball(0.25, 0.07),
+                                     make_ellipsoid(Vec3(0.3, 0.5, 0.2), -0.15)};
   for (std::size_t s = 0; s < shapes.size(); ++s) {
     CAPTURE(s);
     const Shape& shape = shapes[s];
@@ -323,7 +333,9 @@ TEST_CASE("Smooth shapes: exact support, radius and tight world box against brut
     double far = 0.0;
     for (const Vec3& x : samples) far = std::max(far, x.norm());
     CHECK(far <= max_radius(shape) * (1 + 1e-15));
-    CHECK(far >= max_radius(shape) * (1 - 2e-2));
+    // (An ellipsoid off its centre of mass: a bound only, sqrt(a_max^2 + 2 |o| a_z + o^2).)
+    const auto* e = std::get_if<Ellipsoid>(&shape);
+    if (!(e && e->com_offset != 0.0)) CHECK(far >= max_radius(shape) * (1 - 2e-2));
     // The world box is tight: its faces are the support points along the axes.
     for (int trial = 0; trial < 10; ++trial) {
       const Quat q = random_rotation(rng);
@@ -337,6 +349,11 @@ TEST_CASE("Smooth shapes: exact support, radius and tight world box against brut
   }
   CHECK(max_radius(Shape(make_cylinder(0.4, 0.3))) == Approx(0.5).epsilon(1e-15));
   CHECK(max_radius(Shape(make_loaded_ball(0.25, -0.07))) == Approx(0.32).epsilon(1e-15));
+  CHECK(max_radius(Shape(make_ellipsoid(Vec3(0.3, 0.5, 0.2), -0.15))) ==
+        Approx(std::sqrt(0.25 + 2 * 0.15 * 0.2 + 0.0225)).epsilon(1e-15));
+  // Equal semi-axes: a loaded ball's reach.
+  CHECK(max_radius(Shape(make_ellipsoid(Vec3(0.25, 0.25, 0.25), 0.07))) ==
+        Approx(0.32).epsilon(1e-15));
 }
 
 TEST_CASE("Smooth shapes: the support point's derivative matches a central difference") {
@@ -344,7 +361,8 @@ TEST_CASE("Smooth shapes: the support point's derivative matches a central diffe
   // is symmetric and annihilates the direction (the support function is homogeneous of degree 1).
   std::mt19937_64 rng(1602);
   const std::vector<Shape> shapes = {make_ellipsoid(Vec3(0.3, 0.5, 0.7)), make_cylinder(0.4, 0.05),
-                                     make_capsule(0.2, 0.35), make_loaded_ball(0.25, 0.07)};
+                                     make_capsule(0.2, 0.35), make_loaded_ball(0.25, 0.07),
+                                     make_ellipsoid(Vec3(0.3, 0.5, 0.2), -0.15)};
   for (std::size_t s = 0; s < shapes.size(); ++s) {
     CAPTURE(s);
     const Shape& shape = shapes[s];
