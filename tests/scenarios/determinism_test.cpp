@@ -66,6 +66,7 @@ const Expected kExpected[] = {
     {"eulers_disk.json", 0x55c68a6f573a9060ull},
     {"pool_break.json", 0xe1c1d57e3de8b6ffull},
     {"rattleback.json", 0x003b2642906254d9ull},
+    {"rattleback_kane_levinson.json", 0x2532c11745a46e48ull},
     {"rolling_coin.json", 0x373d3cc0b5b05554ull},
     {"sphere_slide_to_roll.json", 0x9f92366eb6da51e0ull},
     {"tippe_top.json", 0x9ef6444333ef35b8ull},

@@ -6,6 +6,9 @@
 # and the spin reversing at the same sample (4.01 s spun at -5; never spun at +5). With the
 # scene's mu 0.5 (spun at -5): 4e-7 rad/s until the rolling motion first needs more than mu N
 # (2.1029 s), where the first slip event must be, within two oracle steps.
+# scenarios/rattleback_kane_levinson.json (Kane & Levinson's body and start, centre of mass 1 cm
+# below the centre, rolling from its first instant), spun the sense it reverses in, to 4 s: the
+# spin changing sign at the same samples (2.77, 2.79, 2.81 s), within 1e-5 rad/s from t = 0.
 # Usage: rattleback_oracle_test.sh PALPABLE PYTHON SOURCE_DIR
 set -uo pipefail
 palpable=$1
@@ -14,12 +17,12 @@ source_dir=$3
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 fail=0
-check() {  # name, end, oracle options, then palpable --set values
-  local name=$1 end=$2 oracle=$3
-  shift 3
+check() {  # scene, name, end, oracle options, then palpable --set values
+  local scene=$source_dir/scenarios/$1 name=$2 end=$3 oracle="$4 --scene $source_dir/scenarios/$1"
+  shift 4
   local sets=(--set /settings/integration_tolerance=1e-11 --set "/end_time=$end")
   for s in "$@"; do sets+=(--set "$s"); done
-  if ! "$palpable" run "$source_dir/scenarios/rattleback.json" "${sets[@]}" \
+  if ! "$palpable" run "$scene" "${sets[@]}" \
       --trace "$work/$name.csv" --events "$work/$name.events.csv" >/dev/null 2>"$work/err"; then
     echo "FAIL $name: palpable exit $?: $(tail -c 400 "$work/err")"
     fail=1
@@ -34,8 +37,10 @@ check() {  # name, end, oracle options, then palpable --set values
     fail=1
   fi
 }
-check spin_minus5_no_slip 5 "--mu 10" /parameters/spin=-5 /parameters/mu=10
-check spin_plus5_no_slip 4 "--mu 10" /parameters/spin=5 /parameters/mu=10
-check pitch_only_no_slip 4 "--mu 10" /parameters/spin=0 /parameters/mu=10
-check spin_minus5_mu05 2.5 "--mu 0.5 --events $work/spin_minus5_mu05.events.csv" /parameters/spin=-5
+check rattleback.json spin_minus5_no_slip 5 "--mu 10" /parameters/spin=-5 /parameters/mu=10
+check rattleback.json spin_plus5_no_slip 4 "--mu 10" /parameters/spin=5 /parameters/mu=10
+check rattleback.json pitch_only_no_slip 4 "--mu 10" /parameters/spin=0 /parameters/mu=10
+check rattleback.json spin_minus5_mu05 2.5 "--mu 0.5 --events $work/spin_minus5_mu05.events.csv" \
+  /parameters/spin=-5
+check rattleback_kane_levinson.json kane_levinson 4 "--mu 10 --from 0"
 exit $fail
