@@ -136,8 +136,8 @@ std::string polyhedron_defect(const ConvexPolyhedron& polyhedron, double toleran
 // offset. Throw InputError naming the argument.
 Sphere make_sphere(double radius);
 Halfspace make_halfspace(const Vec3& normal_M, double offset);
-// Positive finite semi-axes / radius / half-height / half-length, and |com_offset| < radius.
-// Throw InputError naming the argument.
+// Positive finite semi-axes / radius / half-height / half-length, and |com_offset| < radius (an
+// ellipsoid's: < its z semi-axis). Throw InputError naming the argument.
 Ellipsoid make_ellipsoid(const Vec3& semi_axes_M, double com_offset = 0.0);
 Cylinder make_cylinder(double radius, double half_height);
 Capsule make_capsule(double radius, double half_length);
