@@ -339,10 +339,9 @@ Body parse_body(const Reader& r, const json& value, const std::string& path) {
     // is off its centre) must be given its inertia, and an ellipsoid may be (a rattleback's
     // principal axes are turned from its geometric ones).
     const bool loaded = std::holds_alternative<LoadedBall>(*body.shape);
-    const bool ellipsoid = std::holds_alternative<Ellipsoid>(*body.shape);
+    const auto* ellipsoid = std::get_if<Ellipsoid>(body.shape.get());
     const bool given = value.contains("inertia");
-    const auto* e = std::get_if<Ellipsoid>(body.shape.get());
-    if (e && e->com_offset != 0.0 && !given) {
+    if (ellipsoid && ellipsoid->com_offset != 0.0 && !given) {
       r.fail(path,
              "an ellipsoid with a \"com_offset\" needs \"mass\" (kg) and \"inertia\" (about its "
              "centre of mass, kg m^2): uniform density cannot put its centre of mass off its "
