@@ -1483,14 +1483,32 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
   // Each contact's slip and relative angular velocity at the start of the step (world): a
   // sliding contact whose slip turns against it within the step has passed through zero.
   std::vector<Vec3> slip_before, dw_before;
-  auto solve_at = [&](double t, const dopri5::State& y, Problem& p) {
-    const std::vector<BodyState> states = unpack(y, t);
-    p = build_problem(*this, world, states, t, /*follow=*/true, slip_floor, &slip_before);
-    return solve_held(p.bodies, p.contacts);
+  // The contact problem at a state and its solution, kept for the next call: the event
+  // functions at the end of a step are asked at the state of its last stage (first same as
+  // last), solved already. `start` counts the steps begun (the problem depends on slip_before).
+  struct Solved {
+    double t = kInfinity;
+    dopri5::State y;
+    std::size_t start = 0;
+    Problem p;
+    HeldSolution s;
+  } solved;
+  std::size_t start = 0;
+  auto solve_at = [&](double t, const dopri5::State& y) -> const Solved& {
+    if (solved.t == t && solved.start == start && solved.y.size() == y.size() &&
+        (solved.y.array() == y.array()).all()) {
+      return solved;
+    }
+    solved.t = t;
+    solved.y = y;
+    solved.start = start;
+    solved.p = build_problem(*this, world, unpack(y, t), t, /*follow=*/true, slip_floor,
+                             &slip_before);
+    solved.s = solve_held(solved.p.bodies, solved.p.contacts);
+    return solved;
   };
   auto rhs = [&](double t, const dopri5::State& y) {
-    Problem p;
-    const HeldSolution s = solve_at(t, y, p);
+    const HeldSolution& s = solve_at(t, y).s;
     if (s.status != HeldStatus::kOk) failed = true;
     dopri5::State dy(y.size());
     for (std::size_t k = 0; k < bodies.size(); ++k) {
@@ -1512,8 +1530,9 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
   // change within a motion), so that the values at two states line up entry by entry.
   auto events = [&](double t, const dopri5::State& y) {
     std::vector<EventValue> out;
-    Problem p;
-    const HeldSolution s = solve_at(t, y, p);
+    const Solved& solution = solve_at(t, y);
+    const Problem& p = solution.p;
+    const HeldSolution& s = solution.s;
     const std::vector<BodyState> states = unpack(y, t);
     const double still_speed = slip_floor;
     const double ftol = 1e-9 * weight;
@@ -1672,6 +1691,7 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
   const double cap = t0 + settings.broad_phase_horizon_s;
   double h = std::min(1e-3, cap - t);
   auto record_step_start = [&](double time, const dopri5::State& state) {
+    ++start;
     Problem p = build_problem(*this, world, unpack(state, time), time, /*follow=*/true, slip_floor);
     const std::vector<HeldContactMotion> m = held_velocities(p.bodies, p.contacts);
     slip_before.resize(m.size());
