@@ -1485,7 +1485,7 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
   std::vector<Vec3> slip_before, dw_before;
   // The contact problem at a state and its solution, kept for the next call: the event
   // functions at the end of a step are asked at the state of its last stage (first same as
-  // last), solved already. `start` counts the steps begun (the problem depends on slip_before).
+  // last), solved already. `start` counts the changes of slip_before that change the problem.
   struct Solved {
     double t = kInfinity;
     dopri5::State y;
@@ -1502,8 +1502,8 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
     solved.t = t;
     solved.y = y;
     solved.start = start;
-    solved.p = build_problem(*this, world, unpack(y, t), t, /*follow=*/true, slip_floor,
-                             &slip_before);
+    solved.p =
+        build_problem(*this, world, unpack(y, t), t, /*follow=*/true, slip_floor, &slip_before);
     solved.s = solve_held(solved.p.bodies, solved.p.contacts);
     return solved;
   };
@@ -1691,15 +1691,21 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
   const double cap = t0 + settings.broad_phase_horizon_s;
   double h = std::min(1e-3, cap - t);
   auto record_step_start = [&](double time, const dopri5::State& state) {
-    ++start;
     Problem p = build_problem(*this, world, unpack(state, time), time, /*follow=*/true, slip_floor);
     const std::vector<HeldContactMotion> m = held_velocities(p.bodies, p.contacts);
     slip_before.resize(m.size());
     dw_before.resize(m.size());
+    // The slips at a step's start change the problem only through a sliding contact below the
+    // floor (build_problem): without one, the problem solved at this state is still the same.
+    const double still = std::max(settings.still_speed_mps, slip_floor);
+    bool changes = false;
     for (std::size_t i = 0; i < m.size(); ++i) {
       slip_before[i] = m[i].slip_W;
       dw_before[i] = m[i].dw_W;
+      changes = changes ||
+                (!p.contacts[i].sticks && plane_coords(p.contacts[i], m[i].slip_W).norm() <= still);
     }
+    if (changes) ++start;
   };
   record_step_start(t, y);
   std::vector<EventValue> g_prev = events(t, y);
