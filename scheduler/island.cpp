@@ -705,7 +705,7 @@ Problem build_problem(const Island& island, const World& world,
     const double still = std::max(world.settings.still_speed_mps, slip_floor);
     for (std::size_t i = 0; i < p.contacts.size(); ++i) {
       HeldContact& c = p.contacts[i];
-      const Vec2 slip(now[i].slip_W.dot(c.t1_W), now[i].slip_W.dot(c.t2_W));
+      const Vec2 slip = plane_coords(c, now[i].slip_W);
       if (!c.sticks && slip.norm() > still) {
         c.slip_dir = slip.normalized();
       } else if (!c.sticks && slip_before != nullptr && i < slip_before->size()) {
@@ -1690,20 +1690,21 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
   dopri5::State k0 = rhs(t, y);
   const double cap = t0 + settings.broad_phase_horizon_s;
   double h = std::min(1e-3, cap - t);
+  // The state is the one last solved (the step's last stage, or the first right-hand side): its
+  // problem is kept, and the velocities do not depend on the directions followed.
   auto record_step_start = [&](double time, const dopri5::State& state) {
-    Problem p = build_problem(*this, world, unpack(state, time), time, /*follow=*/true, slip_floor);
+    const Problem& p = solve_at(time, state).p;
     const std::vector<HeldContactMotion> m = held_velocities(p.bodies, p.contacts);
     slip_before.resize(m.size());
     dw_before.resize(m.size());
     // The slips at a step's start change the problem only through a sliding contact below the
     // floor (build_problem): without one, the problem solved at this state is still the same.
-    const double still = std::max(settings.still_speed_mps, slip_floor);
     bool changes = false;
     for (std::size_t i = 0; i < m.size(); ++i) {
       slip_before[i] = m[i].slip_W;
       dw_before[i] = m[i].dw_W;
-      changes = changes ||
-                (!p.contacts[i].sticks && plane_coords(p.contacts[i], m[i].slip_W).norm() <= still);
+      changes = changes || (!p.contacts[i].sticks &&
+                            plane_coords(p.contacts[i], m[i].slip_W).norm() <= slip_floor);
     }
     if (changes) ++start;
   };
