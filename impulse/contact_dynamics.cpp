@@ -180,6 +180,8 @@ class Assembly {
   Assembly(const std::vector<HeldBody>& bodies, const std::vector<HeldContact>& contacts,
            bool velocity_level = false)
       : bodies_(bodies), contacts_(contacts), velocity_level_(velocity_level) {
+    kinematics_.resize(contacts.size());
+    rows_.reserve(6 * contacts.size());
     for (std::size_t i = 0; i < contacts.size(); ++i) {
       if (contacts[i].active) add_contact(static_cast<int>(i));
     }
@@ -219,12 +221,9 @@ class Assembly {
     VecX p;
     {
       const Eigen::Index m = static_cast<Eigen::Index>(a->rows_.size());
-      MatX A(m, m);
+      const MatX A = a->coupling_matrix();
       VecX rhs(m);
-      for (Eigen::Index i = 0; i < m; ++i) {
-        rhs(i) = -a->rows_[static_cast<std::size_t>(i)].bias;
-        for (Eigen::Index j = 0; j < m; ++j) A(i, j) = a->coupling(i, j);
-      }
+      for (Eigen::Index i = 0; i < m; ++i) rhs(i) = -a->rows_[static_cast<std::size_t>(i)].bias;
       p = Eigen::CompleteOrthogonalDecomposition<MatX>(A).solve(rhs);
       if (!p.allFinite()) return 0.0;
     }
@@ -266,7 +265,7 @@ class Assembly {
     const Eigen::Index m = static_cast<Eigen::Index>(rows_.size());
     VecX lambda = VecX::Zero(m);
     if (m > 0) {
-      MatX A = MatX::Zero(m, m);
+      const MatX A = coupling_matrix();
       VecX rhs(m);
       for (Eigen::Index i = 0; i < m; ++i) {
         const Row& ri = rows_[static_cast<std::size_t>(i)];
@@ -275,13 +274,15 @@ class Assembly {
           if (ri.body[p] >= 0) value += ri.J[p].dot(free[static_cast<std::size_t>(ri.body[p])]);
         }
         rhs(i) = -value;
-        for (Eigen::Index j = 0; j < m; ++j) A(i, j) = coupling(i, j);
       }
       if (!A.allFinite() || !rhs.allFinite()) {
         out.status = HeldStatus::kNonFinite;
         return out;
       }
-      Eigen::CompleteOrthogonalDecomposition<MatX> cod(A);
+      // Kept from one solve to the next (of the same island, mostly the same size): its storage
+      // is allocated once rather than at every solve.
+      thread_local Eigen::CompleteOrthogonalDecomposition<MatX> cod;
+      cod.compute(A);
       lambda = cod.solve(rhs);
       const double scale = rhs.norm() + A.norm() * lambda.norm();
       out.residual = scale > 0.0 ? (A * lambda - rhs).norm() / scale : 0.0;
@@ -312,7 +313,7 @@ class Assembly {
     out.motion.assign(contacts_.size(), HeldContactMotion{});
     for (std::size_t i = 0; i < contacts_.size(); ++i) {
       const HeldContact& c = contacts_[i];
-      const Kinematics k = kinematics(c, bodies_);
+      const Kinematics k = kinematics_[i] ? *kinematics_[i] : kinematics(c, bodies_);
       HeldContactMotion& mo = out.motion[i];
       mo.slip_W = k.slip;
       mo.dw_W = k.dw;
@@ -361,19 +362,42 @@ class Assembly {
   static double kinetic(const HeldBody& b) {
     return 0.5 * b.mass * b.v_W.squaredNorm() + 0.5 * b.w_W.dot(b.inertia_W * b.w_W);
   }
-  // A_ij: row i's value per unit multiplier of row j.
-  double coupling(Eigen::Index i, Eigen::Index j) const {
-    const Row& ri = rows_[static_cast<std::size_t>(i)];
-    const Row& rj = rows_[static_cast<std::size_t>(j)];
-    double sum = 0.0;
-    for (int p = 0; p < 2; ++p) {
+  // A_ij: row i's value per unit multiplier of row j, the sum over the bodies both rows act on
+  // of J_i . M^-1 W_j. Gathered body by body: two rows are coupled only through a body they
+  // share, and in an island of many bodies most pairs of rows share none. (Two rows share at
+  // most two bodies, and a sum of two terms does not depend on their order.)
+  MatX coupling_matrix() const {
+    const Eigen::Index m = static_cast<Eigen::Index>(rows_.size());
+    MatX A = MatX::Zero(m, m);
+    // The rows acting on each body, with the side (0 mover, 1 support) it takes in each: body b's
+    // are on[begin[b] .. begin[b + 1]), in the order of the rows.
+    const std::size_t nb = bodies_.size();
+    std::vector<std::size_t> begin(nb + 1, 0);
+    for (const Row& r : rows_) {
       for (int q = 0; q < 2; ++q) {
-        if (ri.body[p] >= 0 && ri.body[p] == rj.body[q]) {
-          sum += ri.J[p].dot(rj.MW[q]);
+        if (r.body[q] >= 0) ++begin[static_cast<std::size_t>(r.body[q]) + 1];
+      }
+    }
+    for (std::size_t b = 0; b < nb; ++b) begin[b + 1] += begin[b];
+    std::vector<std::pair<Eigen::Index, int>> on(begin[nb]);
+    std::vector<std::size_t> next(begin.begin(), begin.end() - 1);
+    for (Eigen::Index j = 0; j < m; ++j) {
+      const Row& r = rows_[static_cast<std::size_t>(j)];
+      for (int q = 0; q < 2; ++q) {
+        if (r.body[q] >= 0) on[next[static_cast<std::size_t>(r.body[q])]++] = {j, q};
+      }
+    }
+    for (std::size_t b = 0; b < nb; ++b) {
+      for (std::size_t u = begin[b]; u < begin[b + 1]; ++u) {
+        const auto [i, p] = on[u];
+        const Vec6& J = rows_[static_cast<std::size_t>(i)].J[p];
+        for (std::size_t v = begin[b]; v < begin[b + 1]; ++v) {
+          const auto [j, q] = on[v];
+          A(i, j) += J.dot(rows_[static_cast<std::size_t>(j)].MW[q]);
         }
       }
     }
-    return sum;
+    return A;
   }
 
   struct Layout {
@@ -662,7 +686,8 @@ class Assembly {
 
   void add_contact(int i) {
     const HeldContact& c = contacts_[static_cast<std::size_t>(i)];
-    const Kinematics k = kinematics(c, bodies_);
+    kinematics_[static_cast<std::size_t>(i)] = kinematics(c, bodies_);
+    const Kinematics& k = *kinematics_[static_cast<std::size_t>(i)];
     Layout& l = layout_[static_cast<std::size_t>(i)];
     const Vec3 s_hat = c.slip_dir.x() * c.t1_W + c.slip_dir.y() * c.t2_W;
     // Rocking axes held by the patch, and their rates.
@@ -736,6 +761,8 @@ class Assembly {
   bool velocity_level_ = false;
   std::vector<Row> rows_;
   std::vector<Layout> layout_ = std::vector<Layout>(contacts_.size());
+  // Each active contact's kinematics, as its rows were built from them.
+  std::vector<std::optional<Kinematics>> kinematics_;
 };
 
 }  // namespace

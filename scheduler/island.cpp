@@ -646,6 +646,8 @@ Problem build_problem(const Island& island, const World& world,
                       const std::vector<BodyState>& states, double t, bool follow = false,
                       double slip_floor = 0.0, const std::vector<Vec3>* slip_before = nullptr) {
   Problem p;
+  p.bodies.reserve(island.bodies.size());
+  p.contacts.reserve(island.links.size());
   for (std::size_t k = 0; k < island.bodies.size(); ++k) {
     const Body& b = world.bodies[island.bodies[k].index];
     const BodyState& s = states[k];
