@@ -783,11 +783,15 @@ HeldSolution solve_held(const std::vector<HeldBody>& bodies,
 
 std::vector<HeldContactMotion> held_velocities(const std::vector<HeldBody>& bodies,
                                                const std::vector<HeldContact>& contacts) {
+  // The velocities alone, as kinematics() computes them (its Jacobians are not needed here).
   std::vector<HeldContactMotion> out(contacts.size());
   for (std::size_t i = 0; i < contacts.size(); ++i) {
-    const Kinematics k = kinematics(contacts[i], bodies);
-    out[i].slip_W = k.slip;
-    out[i].dw_W = k.dw;
+    const HeldContact& c = contacts[i];
+    const Side m = mover_side(c, bodies), s = support_side(c, bodies);
+    const Vec3 u_m = m.v + m.w.cross(Vec3(c.c_W - m.x));
+    const Vec3 u_s = s.v + s.w.cross(Vec3(c.c_W - s.x));
+    out[i].slip_W = u_m - u_s;
+    out[i].dw_W = m.w - s.w;
   }
   return out;
 }
