@@ -74,6 +74,11 @@ Vec6 wrench(const Vec3& f, const Vec3& tau) {
   return w;
 }
 
+// The velocity of the point at r (from the side's centre) moving with that side.
+Vec3 point_velocity(const Side& side, const Vec3& r) {
+  return side.v + side.w.cross(r);
+}
+
 // The kinematics of a contact at this instant.
 struct Kinematics {
   Side m, s;
@@ -92,8 +97,8 @@ Kinematics kinematics(const HeldContact& c, const std::vector<HeldBody>& bodies)
   k.s = support_side(c, bodies);
   k.r_m = c.c_W - k.m.x;
   k.r_s = c.c_W - k.s.x;
-  const Vec3 u_m = k.m.v + k.m.w.cross(k.r_m);
-  const Vec3 u_s = k.s.v + k.s.w.cross(k.r_s);
+  const Vec3 u_m = point_velocity(k.m, k.r_m);
+  const Vec3 u_s = point_velocity(k.s, k.r_s);
   k.slip = u_m - u_s;
   k.n_dot = c.has_n_dot ? c.n_dot_W : Vec3(k.s.w.cross(c.n_W));
   k.dw = k.m.w - k.s.w;
@@ -788,9 +793,7 @@ std::vector<HeldContactMotion> held_velocities(const std::vector<HeldBody>& bodi
   for (std::size_t i = 0; i < contacts.size(); ++i) {
     const HeldContact& c = contacts[i];
     const Side m = mover_side(c, bodies), s = support_side(c, bodies);
-    const Vec3 u_m = m.v + m.w.cross(Vec3(c.c_W - m.x));
-    const Vec3 u_s = s.v + s.w.cross(Vec3(c.c_W - s.x));
-    out[i].slip_W = u_m - u_s;
+    out[i].slip_W = point_velocity(m, c.c_W - m.x) - point_velocity(s, c.c_W - s.x);
     out[i].dw_W = m.w - s.w;
   }
   return out;
