@@ -55,6 +55,15 @@ struct Step {
     }
     return y0 + h * sum;
   }
+  // One component of at(theta).
+  double at(double theta, Eigen::Index i) const {
+    const double t1 = theta, t2 = t1 * theta, t3 = t2 * theta, t4 = t3 * theta;
+    double sum = 0.0;
+    for (int j = 0; j < 7; ++j) {
+      sum += (kP[j][0] * t1 + kP[j][1] * t2 + kP[j][2] * t3 + kP[j][3] * t4) * k[j](i);
+    }
+    return y0(i) + h * sum;
+  }
 };
 
 // Takes the step of length h from (t, y0) with k0 = f(t, y0); f(t, y) -> dy/dt. The error norm

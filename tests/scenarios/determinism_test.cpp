@@ -56,20 +56,20 @@ struct Expected {
 // The committed final-state hashes of the shipped scenes.
 const Expected kExpected[] = {
     {"ball_on_platter.json", 0x05f50177987f5e0bull},
-    {"balls_in_dish.json", 0x36cc351f72fb0f3dull},
+    {"balls_in_dish.json", 0x9bb193d7a7fa1b63ull},
     {"block_on_ramp_accelerating.json", 0x7baccee39ea4ad1eull},
     {"block_on_ramp_decelerating.json", 0x8369ce1c7eaca70aull},
-    {"bowling.json", 0x437dbd625f3e536dull},
-    {"chain_of_balls.json", 0xbd154f45656c1ebdull},
-    {"coins.json", 0x76227348467ff33aull},
+    {"bowling.json", 0x64691a210669558full},
+    {"chain_of_balls.json", 0x5f410a13959037cbull},
+    {"coins.json", 0x12a5a3f657b7dea7ull},
     {"cylinder_rolling_slope.json", 0x4bc4bf6ecb23e51aull},
     {"eulers_disk.json", 0x55c68a6f573a9060ull},
     {"pool_break.json", 0xe1c1d57e3de8b6ffull},
-    {"rattleback.json", 0x4a36b93efdf41d99ull},
+    {"rattleback.json", 0xf8596674804a2797ull},
     {"rattleback_kane_levinson.json", 0x2532c11745a46e48ull},
     {"rolling_coin.json", 0x373d3cc0b5b05554ull},
     {"sphere_slide_to_roll.json", 0x9f92366eb6da51e0ull},
-    {"tippe_top.json", 0xd6fe6856d5b9c67full},
+    {"tippe_top.json", 0x7876a527ea20ec4full},
 };
 
 }  // namespace
