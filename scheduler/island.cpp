@@ -1739,10 +1739,12 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
   // (s_i - floor / 2)) over the decelerating slips s_i between the floor and c: in sigma a slip
   // decays exponentially towards half the floor and its direction converges smoothly, so it
   // crosses the floor (its stop event) at a finite sigma and no stage looks below half of it.
-  // Time is then integrated as one more component of the state; the slips on the clock are
-  // chosen at each step's start. (Measured on the piles: rejected steps halved, a quarter fewer
-  // step attempts in all; steps taken about the same, since the tolerance, not the smoothness,
-  // sets them.)
+  // Time is then integrated as one more component of the state - the time since the step's
+  // start times the motion's speed scale, so that its error is judged in metres, as the
+  // positions' are (absolute time would let its error grow with the time simulated); the slips
+  // on the clock are chosen at each step's start. (Measured on the piles: rejected steps halved, a
+  // quarter fewer step attempts in all; steps taken about the same, since the tolerance, not the
+  // smoothness, sets them.)
   const std::size_t n = kPerBody * bodies.size();
   const double clock_speed = kClockSpeed * slip_floor;
   struct ClockTerm {
@@ -1794,13 +1796,15 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
       }
     }
   };
+  clock_scale_ = speed_scale;
+  double clock_t0 = t;  // the clocked step's start
   auto rhs_clocked = [&](double /*sigma*/, const dopri5::State& Y) {
-    const double time = Y(static_cast<Eigen::Index>(n));
+    const double time = clock_t0 + Y(static_cast<Eigen::Index>(n)) / speed_scale;
     const dopri5::State state = Y.head(static_cast<Eigen::Index>(n));
     const dopri5::State dy = rhs(time, state);
     const double g = clock_rate(solve_at(time, state));
     dopri5::State out(n + 1);
-    out << g * dy, g;
+    out << g * dy, speed_scale * g;
     return out;
   };
   choose_clock(t, y);
@@ -1823,8 +1827,9 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
     } else {
       g0 = clock_rate(solve_at(t, y));
       dopri5::State Y(n + 1), K0(n + 1);
-      Y << y, t;
-      K0 << g0 * k0, g0;
+      Y << y, 0.0;
+      K0 << g0 * k0, speed_scale * g0;
+      clock_t0 = t;
       dopri5::take_step(rhs_clocked, 0.0, Y, K0, h / g0, rtol, atol, step);
       step.t = t;
     }
@@ -1834,6 +1839,7 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
       step.error = 1e10;
     }
     if (failed) break;
+    if (std::isnan(step.error)) step.error = 1e10;  // rejected, and shrunk
     if (step.error > 1.0) {
       h = g0 * dopri5::next_step_size(step.h, step.error);
       if (++integration.rejected > 1000 || h <= 1e-14 * std::max(1.0, t)) {
@@ -1843,12 +1849,12 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
       continue;
     }
     auto time_at = [&](double theta) {
-      return clocked ? step.at(theta, time_index) : t + theta * h;
+      return clocked ? t + step.at(theta, time_index) / speed_scale : t + theta * h;
     };
     auto y_at = [&](double theta) -> dopri5::State {
       return clocked ? dopri5::State(step.at(theta).head(time_index)) : step.at(theta);
     };
-    const double t1 = clocked ? step.y1(time_index) : t + h;
+    const double t1 = clocked ? t + step.y1(time_index) / speed_scale : t + h;
     const dopri5::State y1 = clocked ? dopri5::State(step.y1.head(time_index)) : step.y1;
     const std::vector<EventValue> g_new = events(t1, y1);
     // The earliest event function crossing below its tolerance within the step.
@@ -1874,7 +1880,8 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
       const Eigen::Index o = static_cast<Eigen::Index>(kPerBody * k);
       // Accelerations: a clocked step's stages are derivatives in sigma, dt/dsigma times them.
       auto acceleration = [&](const dopri5::State& kk) -> Vec3 {
-        return clocked ? Vec3(kk.segment<3>(o + 7) / kk(time_index)) : Vec3(kk.segment<3>(o + 7));
+        return clocked ? Vec3(kk.segment<3>(o + 7) * speed_scale / kk(time_index))
+                       : Vec3(kk.segment<3>(o + 7));
       };
       if (steps_.empty()) a_start[k] = acceleration(step.k[0]);
       for (const dopri5::State& kk : step.k) {
@@ -1895,11 +1902,13 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
     }
     t = t1;
     y = y1;
-    k0 = clocked ? dopri5::State(step.k[6].head(time_index) / step.k[6](time_index)) : step.k[6];
+    k0 = clocked ? dopri5::State(step.k[6].head(time_index) * speed_scale / step.k[6](time_index))
+                 : step.k[6];
     record_step_start(t, y);
     landing_threshold.clear();
     g_prev = events(t, y);
-    h = (clocked ? step.k[6](time_index) : 1.0) * dopri5::next_step_size(step.h, step.error);
+    h = (clocked ? step.k[6](time_index) / speed_scale : 1.0) *
+        dopri5::next_step_size(step.h, step.error);
     choose_clock(t, y);
   }
   if (steps_.size() >= kMaxSteps && event.kind == IslandEvent::Kind::kSegmentEnd) t_end = t;
@@ -1907,7 +1916,7 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
   integration.failed = failed;
   if (failed) {
     // The contact problem broke down along the way: end the segment where it last held.
-    t_end = steps_.empty() ? t0 : steps_.back().t + steps_.back().h;
+    t_end = steps_.empty() ? t0 : t;  // the last accepted step's end (a clocked h is no time)
     event = IslandEvent{IslandEvent::Kind::kSegmentEnd, -1};
   }
   // The acceleration of each body from its value at the start, with a quarter more than the
@@ -1952,11 +1961,12 @@ BodyState Island::state_at(std::size_t k, double t) const {
       const dopri5::Step& st = it == steps_.begin() ? steps_.front() : *(it - 1);
       const Eigen::Index n = static_cast<Eigen::Index>(kPerBody * bodies.size());
       if (st.y0.size() > n) {
-        // A clocked step (integrate()): time is its last component, increasing along it.
+        // A clocked step (integrate()): its last component is the time since its start (times
+        // clock_scale_), increasing along it.
         double lo = 0.0, hi = 1.0;
         for (int i = 0; i < 60 && hi - lo > 1e-16; ++i) {
           const double mid = 0.5 * (lo + hi);
-          (st.at(mid, n) < t ? lo : hi) = mid;
+          (st.at(mid, n) < (t - st.t) * clock_scale_ ? lo : hi) = mid;
         }
         return unpack(st.at(hi).head(n), t)[k];
       }

@@ -224,6 +224,8 @@ class Island {
   double radius_ = 0.0;
   // kIntegrated: the accepted steps of the segment.
   std::vector<dopri5::Step> steps_;
+  // A clocked step's last component is the time since its start times this speed [m/s].
+  double clock_scale_ = 1.0;
   std::vector<MotionBound> bounds_;
   std::vector<bool> turning_;  // kUniform: w0 and alpha not parallel (orientation integrated)
   // Orientation of a sphere whose angular velocity turns (kUniform with w0 not parallel to alpha,

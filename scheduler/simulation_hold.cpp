@@ -148,7 +148,7 @@ double Simulation::Impl::raise_to_resolution(const HeldLink& link, double gap) {
   return floor;
 }
 
-void Simulation::Impl::part_released(std::uint32_t index) {
+void Simulation::Impl::part_released(std::uint32_t index, double t) {
   // A held contact's gap drifts with the integration of its motion (~1e-11 m over 0.2 s for a
   // ball rolling off a ball, held at a gap of zero): let go 5e-12 to 6e-11 m into the other
   // body, the pair was found overlapping at every check (51 and 114 times at the progress floor)
@@ -159,20 +159,26 @@ void Simulation::Impl::part_released(std::uint32_t index) {
   const PairSet::Pair& q = pairs.pair(index);
   Body& a = body(q.a);
   Body& b = body(q.b);
+  // The island's bodies are committed at t; a kinematic partner is advanced only when asked.
+  const BodyState sa = a.state.t < t ? extrapolate(q.a, t) : a.state;
+  const BodyState sb = b.state.t < t ? extrapolate(q.b, t) : b.state;
   PairCache cache;  // fresh: the pair's own cache stays as its schedule left it
   const DistanceResult dr =
-      closest_features(pairs.geometry(q.a), Pose{a.state.x_W, a.state.q_WM}, pairs.geometry(q.b),
-                       Pose{b.state.x_W, b.state.q_WM}, cache, settings().distance_max_steps);
+      closest_features(pairs.geometry(q.a), Pose{sa.x_W, sa.q_WM}, pairs.geometry(q.b),
+                       Pose{sb.x_W, sb.q_WM}, cache, settings().distance_max_steps);
   if (dr.status != ContactStatus::kPenetrating || !(dr.penetration_depth > 0.0)) return;
   double reach = 0.0;
   for (BodyId id : {q.a, q.b}) {
     if (body(id).is_dynamic()) reach = std::max(reach, pairs.geometry(id).reach());
   }
   // The drift's scale: the integration's absolute tolerance [m] per step, summed over a motion.
-  const double drift = std::max(kPlaneResolution * reach, 100.0 * settings().integration_tolerance);
+  // Never more than a hundredth of the envelope, whatever the tolerance.
+  const double drift =
+      std::min(std::max(kPlaneResolution * reach, 100.0 * settings().integration_tolerance),
+               0.01 * settings().envelope_m);
   if (!(dr.penetration_depth <= drift)) return;
-  const double wa = a.is_dynamic() && !island(q.a) ? a.mass.inv_mass : 0.0;
-  const double wb = b.is_dynamic() && !island(q.b) ? b.mass.inv_mass : 0.0;
+  const double wa = a.is_dynamic() && !island(q.a) && a.state.t == t ? a.mass.inv_mass : 0.0;
+  const double wb = b.is_dynamic() && !island(q.b) && b.state.t == t ? b.mass.inv_mass : 0.0;
   if (!(wa + wb > 0.0)) return;
   a.state.x_W += dr.penetration_depth * wa / (wa + wb) * dr.n_W;  // n_W: from b to a
   b.state.x_W -= dr.penetration_depth * wb / (wa + wb) * dr.n_W;
@@ -295,7 +301,7 @@ void Simulation::Impl::replan(std::uint32_t i, double t) {
     }
     schedule_island(k, t);
   }
-  for (std::uint32_t pair : let_go) part_released(pair);
+  for (std::uint32_t pair : let_go) part_released(pair, t);
   for (BodyId id : touched) {
     if (body(id).is_dynamic()) refresh_broad_phase(id, t);
   }

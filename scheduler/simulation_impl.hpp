@@ -280,7 +280,7 @@ struct Simulation::Impl {
   // event and refreshes its bodies' boxes and bounds.
   void replan(std::uint32_t i, double t);
   // After a release: a pair let go overlapping by its held motion's drift is parted.
-  void part_released(std::uint32_t index);
+  void part_released(std::uint32_t index, double t);
 
   // Splits island k into the components its links connect; bodies no link holds leave it (free
   // flight from their state at t). Returns the new islands (to be planned); island k keeps the
