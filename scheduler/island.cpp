@@ -729,8 +729,9 @@ Problem build_problem(const Island& island, const World& world,
 // The state vector of the integrated motion: per body x, q (w, x, y, z), v, w.
 constexpr int kPerBody = 13;
 // The speed, in multiples of an integrated motion's slip floor, below which a decelerating slip
-// puts the integration on its clock (Island::integrate). Measured on piles of 100 balls (seeds
-// 1-8, 0.4 s): 1e2, 1e3 and 1e4 took a median of 13.9, 9.7 and > 60 s of CPU, 16.6 s without.
+// puts the integration on its clock (Island::integrate). Tried on piles of 100 balls (seeds 1-8,
+// 0.4 s, cut off at 60 s): 1e4 let three of five seeds run past the cut-off; 1e2 and 1e3 did
+// not, 1e3 with fewer rejected steps.
 constexpr double kClockSpeed = 1e3;
 
 dopri5::State pack(const std::vector<BodyState>& states) {
@@ -1742,9 +1743,9 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
   // Time is then integrated as one more component of the state - the time since the step's
   // start times the motion's speed scale, so that its error is judged in metres, as the
   // positions' are (absolute time would let its error grow with the time simulated); the slips
-  // on the clock are chosen at each step's start. (Measured on the piles: rejected steps halved, a
-  // quarter fewer step attempts in all; steps taken about the same, since the tolerance, not the
-  // smoothness, sets them.)
+  // on the clock are chosen at each step's start. (Measured on the piles: fewer steps rejected in
+  // most seeds, steps taken about the same - the tolerance, not the smoothness, sets them; the
+  // piles' total cost moved both ways with chaos, README.)
   const std::size_t n = kPerBody * bodies.size();
   const double clock_speed = kClockSpeed * slip_floor;
   struct ClockTerm {

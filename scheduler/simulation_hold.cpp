@@ -57,12 +57,16 @@ CollisionRecord Simulation::Impl::collide_or_hold(std::uint32_t index, Contact& 
   return record;
 }
 
-double Simulation::Impl::settle_speed(const PairSet::Pair& p) const {
+double Simulation::Impl::dynamic_reach(const PairSet::Pair& p) const {
   double reach = 0.0;
   for (BodyId id : {p.a, p.b}) {
     if (body(id).is_dynamic()) reach = std::max(reach, pairs.geometry(id).reach());
   }
-  return std::sqrt(2.0 * world.gravity_W.norm() * kPlaneResolution * reach);
+  return reach;
+}
+
+double Simulation::Impl::settle_speed(const PairSet::Pair& p) const {
+  return std::sqrt(2.0 * world.gravity_W.norm() * kPlaneResolution * dynamic_reach(p));
 }
 
 std::optional<HeldLink> Simulation::Impl::link_of(std::uint32_t index,
@@ -158,29 +162,24 @@ void Simulation::Impl::part_released(std::uint32_t index, double t) {
   // ball rolling off a ball, held at a gap of zero): let go 5e-12 to 6e-11 m into the other
   // body, the pair was found overlapping at every check (51 and 114 times at the progress floor)
   // until the bodies had parted. Overlapping by less than that drift's scale (below) where the
-  // depth is known (spheres, halfspaces), the body the
-  // release set free is moved out along the normal (both, by their inverse masses, if both are
-  // free; neither if neither is: a body still held is where its own links hold it).
+  // depth is known (spheres, halfspaces), the body the release set free is moved out along the
+  // normal (both, by their inverse masses, if both are free; neither if neither is: a body still
+  // held is where its own links hold it).
   const PairSet::Pair& q = pairs.pair(index);
   Body& a = body(q.a);
   Body& b = body(q.b);
   // The island's bodies are committed at t; a kinematic partner is advanced only when asked.
-  const BodyState sa = a.state.t < t ? extrapolate(q.a, t) : a.state;
-  const BodyState sb = b.state.t < t ? extrapolate(q.b, t) : b.state;
+  const BodyState sa = extrapolate(q.a, t), sb = extrapolate(q.b, t);
   PairCache cache;  // fresh: the pair's own cache stays as its schedule left it
   const DistanceResult dr =
       closest_features(pairs.geometry(q.a), Pose{sa.x_W, sa.q_WM}, pairs.geometry(q.b),
                        Pose{sb.x_W, sb.q_WM}, cache, settings().distance_max_steps);
   if (dr.status != ContactStatus::kPenetrating || !(dr.penetration_depth > 0.0)) return;
-  double reach = 0.0;
-  for (BodyId id : {q.a, q.b}) {
-    if (body(id).is_dynamic()) reach = std::max(reach, pairs.geometry(id).reach());
-  }
   // The drift's scale: the integration's absolute tolerance [m] per step, summed over a motion.
   // Never more than a hundredth of the envelope, whatever the tolerance.
-  const double drift =
-      std::min(std::max(kPlaneResolution * reach, 100.0 * settings().integration_tolerance),
-               0.01 * settings().envelope_m);
+  const double drift = std::min(
+      std::max(kPlaneResolution * dynamic_reach(q), 100.0 * settings().integration_tolerance),
+      0.01 * settings().envelope_m);
   if (!(dr.penetration_depth <= drift)) return;
   const double wa = a.is_dynamic() && !island(q.a) && a.state.t == t ? a.mass.inv_mass : 0.0;
   const double wb = b.is_dynamic() && !island(q.b) && b.state.t == t ? b.mass.inv_mass : 0.0;

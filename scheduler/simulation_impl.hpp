@@ -244,6 +244,8 @@ struct Simulation::Impl {
   // The speed of a fall from the plane's resolution (kPlaneResolution of the larger dynamic
   // body's reach, the height at which an island's landing events take a vertex as on the plane).
   double settle_speed(const PairSet::Pair& p) const;
+  // The larger reach of the pair's dynamic bodies [m] (0 if neither is dynamic).
+  double dynamic_reach(const PairSet::Pair& p) const;
   // The hand-over speed of a contact: the microcollision speed of the bodies' weight along the
   // normal (a held body's acceleration may be zero, its weight is not). A collision that leaves
   // the contact slower is held.
