@@ -46,6 +46,11 @@ CollisionRecord Simulation::Impl::collide_or_hold(std::uint32_t index, Contact& 
       -initial_normal_velocity(c) <= v_hold * (1.0 + settings().microcollision_speed_slack);
   ResolveOptions options;
   options.microcollisions = !link;
+  // The microcollision that replaces the hold rebounds at least at the hand-over speed. (The
+  // contact's own v_micro is zero where the islands on both sides hold their bodies still along
+  // n: a hull leaning on a hull at rest beside it, both held, was struck 100 times at one
+  // instant at 1e-43 m/s, each rebound sent back by its island's plan, until the retry limit.)
+  if (!link) c.v_micro = std::max(c.v_micro, v_hold);
   if ((gentle || round >= 2) && link) options.restitution = 0.0;
   CollisionRecord record = collide(p, c, t, options);
   if (observer) observer->on_collision(record);
