@@ -298,10 +298,12 @@ void Simulation::Impl::replan(std::uint32_t i, double t) {
       // Let go at the instant of its own collision, it keeps its count there: a hold that lets
       // go at once and collides again moves through the rounds of collide_or_hold (and at last
       // the retry limit) instead of looping at one instant; and it counts as a quick release
-      // (hold_round), which a hold that lasts resets.
-      q.quick_releases = q.last_collision_t == t
-                             ? static_cast<std::uint8_t>(std::min(q.quick_releases + 1, 255))
-                             : 0;
+      // (hold_round), which a hold that lasts resets. A hold let go within the progress floor
+      // of its collision counts as quick too: a hull held against a hull's side, its centre of
+      // pressure on its patch's edge, tipped 1.6e-10 s after each hold, was let go, struck
+      // again at 2e-11 m/s and held, 17,500 times in 3 ms of simulated time (112 s of CPU).
+      const bool quick = t - q.last_collision_t <= progress_floor(t);
+      q.quick_releases = quick ? static_cast<std::uint8_t>(std::min(q.quick_releases + 1, 255)) : 0;
       if (q.last_collision_t != t) {
         q.last_collision_t = t;
         q.collisions_at_t = 0;

@@ -233,10 +233,10 @@ struct Simulation::Impl {
   // envelope, tipped about an edge of it clear of the lane and landed back every 1.06e-6 s at
   // 3e-8 m/s, each round 2e-12 of its size lower (the landing event's tolerance), until it
   // overlapped the lane; from the fourth such round it is a microcollision, whose rebound floor
-  // lifts it clear, as a train at one instant. Holds that let go at once count the same way: a
-  // coin struck where its gap closed, held and let go at that instant (its plan lifting what
-  // the next check finds approaching at g times a clock tick) went round 488,000 times in 10 s
-  // of CPU, at last a clock tick (1e-12 t) apart.
+  // lifts it clear, as a train at one instant. Holds that let go at once (or within the progress
+  // floor of their collision) count the same way: a coin struck where its gap closed, held and
+  // let go at that instant (its plan lifting what the next check finds approaching at g times a
+  // clock tick) went round 488,000 times in 10 s of CPU, at last a clock tick (1e-12 t) apart.
   static int hold_round(const PairSet::Pair& p, double t) {
     return std::max({collision_round(p, t), static_cast<int>(p.quiet_landings),
                      static_cast<int>(p.quick_releases)});
