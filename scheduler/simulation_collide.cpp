@@ -151,9 +151,9 @@ double Simulation::Impl::time_to_contact(PairSet::Pair& p, const Contact& c,
   const BodyState& s1 = body(p.a).state;
   const BodyState& s2 = body(p.b).state;
   auto usable = [&](double dt) { return dt > 0.0 && std::isfinite(dt) && t + dt > t ? dt : 0.0; };
-  const ToiBound b = time_to_touch(body(p.a), s1, pairs.geometry(p.a), body(p.b), s2,
-                                   pairs.geometry(p.b), contact, p.cache, world.gravity_W,
-                                   settings());
+  const ToiBound b =
+      time_to_touch(body(p.a), s1, pairs.geometry(p.a), body(p.b), s2, pairs.geometry(p.b), contact,
+                    p.cache, world.gravity_W, settings());
   // Spheres against spheres and planes: the closed form.
   if (b.exact) return usable(b.dt);
   // Otherwise (polyhedra, compounds) the gap is followed along the trajectories to where it
@@ -174,6 +174,42 @@ double Simulation::Impl::time_to_contact(PairSet::Pair& p, const Contact& c,
     case InstantStatus::kNotApplicable: return 0.0;
   }
   return 0.0;
+}
+
+std::optional<CollisionRecord> Simulation::Impl::part_free_pair(const PairSet::Pair& p,
+                                                                const Contact& c,
+                                                                const DistanceResult& contact,
+                                                                double t) {
+  if (!persistent() || !body(p.a).is_dynamic() || !body(p.b).is_dynamic() || island(p.a) ||
+      island(p.b) || contact.status == ContactStatus::kPenetrating ||
+      !(contact.distance <= touching_gap(p)) || !(c.v_micro > 0.0) || !(c.u_n < c.v_micro)) {
+    return std::nullopt;
+  }
+  const Mat3 K = collision_matrix_W(c.body1, c.body2);
+  const double k = c.n_W.dot(K * c.n_W);
+  if (!(k > 0.0)) return std::nullopt;
+  const Vec3 impulse = (c.v_micro - c.u_n) / k * c.n_W;  // on a; b takes the opposite
+  Body& a = body(p.a);
+  Body& b = body(p.b);
+  const double before = kinetic_energy(a, a.state) + kinetic_energy(b, b.state);
+  a.state.v_W += c.body1.inv_mass * impulse;
+  a.state.w_W += c.body1.inv_inertia_W * c.body1.r_W.cross(impulse);
+  b.state.v_W -= c.body2.inv_mass * impulse;
+  b.state.w_W -= c.body2.inv_inertia_W * c.body2.r_W.cross(impulse);
+  CollisionRecord record;
+  record.t = t;
+  record.kind = CollisionKind::kMicrocollision;
+  record.a = p.a;
+  record.b = p.b;
+  record.p_W = c.point_W;
+  record.n_W = c.n_W;
+  record.impulse_W = impulse;
+  record.approach_speed = -c.u_n;
+  record.energy_change = kinetic_energy(a, a.state) + kinetic_energy(b, b.state) - before;
+  ++stats.microcollisions;
+  if (observer) observer->on_collision(record);
+  refresh_after_collision(record, t);
+  return record;
 }
 
 std::optional<CollisionRecord> Simulation::Impl::check_pair(std::uint32_t index, double t) {
@@ -217,6 +253,7 @@ std::optional<CollisionRecord> Simulation::Impl::check_pair(std::uint32_t index,
   }
   if (!lands || lifting(p, c, t)) {
     p.approach_steps = 0;
+    if (auto parted = part_free_pair(p, c, contact, t)) return parted;
     double next = next_check_time(p, s1, s2, dr, t, &c);
     // An exact bound of zero means "collide now"; a contact found not approaching (a group impact
     // leaves a sliding contact at u_n = 0 to rounding, drawn together by gravity), or let go at
