@@ -252,14 +252,14 @@ double Simulation::Impl::next_check_time(const PairSet::Pair& p, const BodyState
   // The progress floor is applied (capped, so that it never carries a pair through contact)
   // by the bound itself; here only the resolution of the clock, so that t + dt > t.
   const double tick = 1e-12 * std::max(1.0, t);
-  if (bound.floored && dr.status != ContactStatus::kPenetrating && !island(p.a) &&
-      !island(p.b) && body(p.a).is_dynamic() && body(p.b).is_dynamic() &&
-      s1.w_W.isZero(0.0) && s2.w_W.isZero(0.0) && world.gravity_W.squaredNorm() > 0.0 &&
+  if (bound.floored && dr.status != ContactStatus::kPenetrating && in_free_flight(p.a) &&
+      in_free_flight(p.b) && s1.w_W.isZero(0.0) && s2.w_W.isZero(0.0) &&
+      world.gravity_W.squaredNorm() > 0.0 &&
       std::abs(dr.n_W.dot(world.gravity_W.normalized())) > kSupportCosine) {
     // Two dynamic bodies in free flight without rotation, one above the other (a box resting on
-    // a box, carried by the microcollisions of the one below) share gravity, so they move uniformly relative to
-    // each other: their distance shrinks no faster than their relative speed, and only a
-    // collision of one of them (which re-bounds the pair) changes that. The bound's aim at half
+    // a box, carried by the microcollisions of the one below) share gravity, so they move uniformly
+    // relative to each other: their distance shrinks no faster than their relative speed, and only
+    // a collision of one of them (which re-bounds the pair) changes that. The bound's aim at half
     // an envelope is meaningless for a pair already closer (it re-checked such a pair at the
     // progress floor, a million times a second).
     // (Where that is sooner than the floor - touching to rounding while sliding - the floor.)

@@ -180,22 +180,23 @@ std::optional<CollisionRecord> Simulation::Impl::part_free_pair(const PairSet::P
                                                                 const Contact& c,
                                                                 const DistanceResult& contact,
                                                                 double t) {
-  if (!persistent() || !body(p.a).is_dynamic() || !body(p.b).is_dynamic() || island(p.a) ||
-      island(p.b) || contact.status == ContactStatus::kPenetrating ||
-      !(contact.distance <= touching_gap(p)) || !(c.v_micro > 0.0) || !(c.u_n < c.v_micro)) {
+  if (!persistent() || !in_free_flight(p.a) || !in_free_flight(p.b) ||
+      contact.status == ContactStatus::kPenetrating || !(contact.distance <= touching_gap(p)) ||
+      !(c.v_micro > 0.0) || !(c.u_n < c.v_micro)) {
     return std::nullopt;
   }
-  const Mat3 K = collision_matrix_W(c.body1, c.body2);
-  const double k = c.n_W.dot(K * c.n_W);
+  const double k = c.n_W.dot(collision_matrix_W(c.body1, c.body2) * c.n_W);
   if (!(k > 0.0)) return std::nullopt;
   const Vec3 impulse = (c.v_micro - c.u_n) / k * c.n_W;  // on a; b takes the opposite
+  ContactBody after1 = c.body1, after2 = c.body2;
+  apply_impulse(impulse, after1, after2);
   Body& a = body(p.a);
   Body& b = body(p.b);
   const double before = kinetic_energy(a, a.state) + kinetic_energy(b, b.state);
-  a.state.v_W += c.body1.inv_mass * impulse;
-  a.state.w_W += c.body1.inv_inertia_W * c.body1.r_W.cross(impulse);
-  b.state.v_W -= c.body2.inv_mass * impulse;
-  b.state.w_W -= c.body2.inv_inertia_W * c.body2.r_W.cross(impulse);
+  a.state.v_W = after1.v_W;
+  a.state.w_W = after1.w_W;
+  b.state.v_W = after2.v_W;
+  b.state.w_W = after2.w_W;
   CollisionRecord record;
   record.t = t;
   record.kind = CollisionKind::kMicrocollision;

@@ -40,8 +40,7 @@ CollisionRecord Simulation::Impl::collide_or_hold(std::uint32_t index, Contact& 
   // 0.1 m/s was held, let go at once by its plan, and left receding from a gap of 2e-13 m at
   // 1e-8 m/s: its pair was then checked every 1e-12 s, 1.7 million times, while rotation
   // slowly drew the hulls apart.)
-  const bool free_pair = body(a).is_dynamic() && body(b).is_dynamic() && !island(a) && !island(b);
-  const double v_hold = free_pair ? 0.0 : hand_over_speed(c);
+  const double v_hold = in_free_flight(a) && in_free_flight(b) ? 0.0 : hand_over_speed(c);
   const bool gentle =
       -initial_normal_velocity(c) <= v_hold * (1.0 + settings().microcollision_speed_slack);
   ResolveOptions options;
@@ -193,8 +192,8 @@ void Simulation::Impl::part_released(std::uint32_t index, double t) {
       std::max(kPlaneResolution * dynamic_reach(q), 100.0 * settings().integration_tolerance),
       0.01 * settings().envelope_m);
   if (!(dr.penetration_depth <= drift)) return;
-  const double wa = a.is_dynamic() && !island(q.a) && a.state.t == t ? a.mass.inv_mass : 0.0;
-  const double wb = b.is_dynamic() && !island(q.b) && b.state.t == t ? b.mass.inv_mass : 0.0;
+  const double wa = in_free_flight(q.a) && a.state.t == t ? a.mass.inv_mass : 0.0;
+  const double wb = in_free_flight(q.b) && b.state.t == t ? b.mass.inv_mass : 0.0;
   if (!(wa + wb > 0.0)) return;
   a.state.x_W += dr.penetration_depth * wa / (wa + wb) * dr.n_W;  // n_W: from b to a
   b.state.x_W -= dr.penetration_depth * wb / (wa + wb) * dr.n_W;

@@ -58,6 +58,8 @@ struct Simulation::Impl {
     const int i = island_of.empty() ? -1 : island_of[id.index];
     return i >= 0 ? &islands[static_cast<std::size_t>(i)] : nullptr;
   }
+  // A dynamic body no island holds: it flies on its closed-form trajectory.
+  bool in_free_flight(BodyId id) const { return body(id).is_dynamic() && !island(id); }
 
   // Is pair `index` one of the held links of its bodies' island?
   bool held_link(std::uint32_t index) const {
@@ -193,8 +195,6 @@ struct Simulation::Impl {
   double time_to_contact(PairSet::Pair& p, const Contact& c, const DistanceResult& dr,
                          const DistanceResult& contact, double t);
 
-  // A pair's event: collide if within the envelope and approaching — an impact at the instant
-  // its gap closes —, else re-bound. Returns the collision, if any.
   // Two bodies in free flight left touching (within the touching gap) and parting slower than
   // the microcollision speed are parted at it by a frictionless impulse along the normal: a
   // microcollision, recorded as one (momentum kept, energy raised by at most the floor's
@@ -204,6 +204,8 @@ struct Simulation::Impl {
   // 1.8 million times (100 hulls, seed 1). Returns the record, or nullopt if it does not apply.
   std::optional<CollisionRecord> part_free_pair(const PairSet::Pair& p, const Contact& c,
                                                 const DistanceResult& contact, double t);
+  // A pair's event: collide if within the envelope and approaching — an impact at the instant
+  // its gap closes —, else re-bound. Returns the collision, if any.
   std::optional<CollisionRecord> check_pair(std::uint32_t index, double t);
 
   // Simultaneous impact (issue 15, impulse/group_impulse.hpp): the contacts that meet pair
