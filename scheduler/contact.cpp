@@ -430,9 +430,20 @@ Contact make_contact(const ContactSide& side1, const ContactSide& side2, const D
   c.x1_W = s1.x_W;
   c.x2_W = s2.x_W;
 
+  // A held body's acceleration, or free flight's. A held polyhedron's at the contact point: its
+  // corner there is a point of the body, so its rotation's terms count (a hull held leaning on a
+  // wall, tipping towards it, pressed its corner against the wall at 8 m/s^2 while its centre
+  // moved along the wall). Not a curved body's: its contact point is no point of it (a rolling
+  // ball's material point there accelerates towards its centre, its gap does not).
   auto acceleration = [&](const ContactSide& side) -> Vec3 {
-    if (side.acceleration_W) return *side.acceleration_W;
-    return side.body.is_dynamic() ? gravity_W : Vec3::Zero();
+    if (!side.acceleration_W) return side.body.is_dynamic() ? gravity_W : Vec3::Zero();
+    if (!side.angular_acceleration_W ||
+        !std::holds_alternative<ConvexPolyhedron>(*side.body.shape)) {
+      return *side.acceleration_W;
+    }
+    const Vec3 r = c.point_W - side.state.x_W;
+    return *side.acceleration_W + side.angular_acceleration_W->cross(r) +
+           side.state.w_W.cross(side.state.w_W.cross(r));
   };
   c.held_acceleration = side1.acceleration_W || side2.acceleration_W;
   c.g_n = -(acceleration(side1) - acceleration(side2)).dot(c.n_W);

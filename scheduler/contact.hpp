@@ -102,6 +102,9 @@ struct ContactSide {
   // The body's acceleration if it is not that of free flight (gravity for a dynamic body, zero
   // for the others): a body held in contact (scheduler/island.hpp). Null: free flight.
   const Vec3* acceleration_W = nullptr;
+  // With acceleration_W: the held body's angular acceleration (null: a body held at this
+  // instant, whose plan is pending, counts as held still).
+  const Vec3* angular_acceleration_W = nullptr;
 };
 
 // Everything the collision of a pair needs, in the world frame; body 1 = a, body 2 = b.

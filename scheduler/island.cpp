@@ -1384,6 +1384,7 @@ void Island::classify(const World& world, const std::vector<const ShapeGeometry*
     find_uniform_event(world, contacts, sol);
     for (std::size_t k = 0; k < nb; ++k) {
       bounds_[k].a_W = a_[k];
+      bounds_[k].alpha_W = alpha_[k];
       const double span = std::isfinite(t_end) ? t_end - t0 : kInfinity;
       bounds_[k].w_bound = alpha_[k].squaredNorm() == 0.0
                                ? anchor_[k].w_W.norm()
@@ -1812,7 +1813,7 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
 
   dopri5::Step step;
   std::vector<double> w_max(bodies.size(), 0.0), a_max(bodies.size(), 0.0);
-  std::vector<Vec3> a_start(bodies.size(), Vec3::Zero());
+  std::vector<Vec3> a_start(bodies.size(), Vec3::Zero()), alpha_start(bodies.size(), Vec3::Zero());
   t_end = cap;
   event = IslandEvent{IslandEvent::Kind::kSegmentEnd, -1};
   // A segment of at most this many steps (its dense output is kept): a motion that needs more is
@@ -1884,7 +1885,12 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
         return clocked ? Vec3(kk.segment<3>(o + 7) * speed_scale / kk(time_index))
                        : Vec3(kk.segment<3>(o + 7));
       };
-      if (steps_.empty()) a_start[k] = acceleration(step.k[0]);
+      if (steps_.empty()) {
+        a_start[k] = acceleration(step.k[0]);
+        alpha_start[k] =
+            clocked ? Vec3(step.k[0].segment<3>(o + 10) * speed_scale / step.k[0](time_index))
+                    : Vec3(step.k[0].segment<3>(o + 10));
+      }
       for (const dopri5::State& kk : step.k) {
         a_max[k] = std::max(a_max[k], (acceleration(kk) - a_start[k]).norm());
       }
@@ -1925,6 +1931,7 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
   // the step's error to be within the tolerance; the margin covers between them).
   for (std::size_t k = 0; k < bodies.size(); ++k) {
     bounds_[k].a_W = a_start[k];
+    bounds_[k].alpha_W = alpha_start[k];
     bounds_[k].a_slack = 1.25 * a_max[k] + 1e-9;
     bounds_[k].w_bound = 1.25 * w_max[k];
   }

@@ -197,12 +197,14 @@ class Island {
   // |w| [rad/s].
   struct MotionBound {
     Vec3 a_W = Vec3::Zero();
+    Vec3 alpha_W = Vec3::Zero();  // the angular acceleration now [rad/s^2]
     double a_slack = 0.0;
     double w_bound = 0.0;
   };
   MotionBound bound(std::size_t k) const;
   // The body's acceleration now (the nominal of bound()).
   const Vec3& acceleration(std::size_t k) const { return bounds_[k].a_W; }
+  const Vec3& angular_acceleration(std::size_t k) const { return bounds_[k].alpha_W; }
 
  private:
   void classify(const World& world, const std::vector<const ShapeGeometry*>& geometry,

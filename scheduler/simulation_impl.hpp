@@ -98,8 +98,15 @@ struct Simulation::Impl {
     if (is->plan_pending) return &kStill;
     return &is->acceleration(static_cast<std::size_t>(is->index_of(id)));
   }
+  // A held body's angular acceleration (its island's), or null.
+  const Vec3* held_angular_acceleration(BodyId id) const {
+    const Island* is = island(id);
+    if (!is || is->plan_pending) return nullptr;
+    return &is->angular_acceleration(static_cast<std::size_t>(is->index_of(id)));
+  }
   ContactSide side(BodyId id, const BodyState& s) const {
-    return ContactSide{id, body(id), pairs.geometry(id), s, held_acceleration(id)};
+    return ContactSide{
+        id, body(id), pairs.geometry(id), s, held_acceleration(id), held_angular_acceleration(id)};
   }
 
   // ---------------------------------------------------------------- pairs and bounds

@@ -435,6 +435,45 @@ TEST_CASE("contact: what approaches, and what carries riders", "[contact]") {
   CHECK_FALSE(carries_riders(against_wall.contact(), s, kGravity));
 }
 
+TEST_CASE(
+    "contact: a held polyhedron presses its contact at its corner's acceleration, a ball "
+    "at its centre's",
+    "[contact]") {
+  // A cube turned 20 degrees about x stands on its lowest edge, 2e-5 m above the ground. Held
+  // (its island's accelerations given), its centre does not accelerate; turning about x at
+  // alpha, the edge, at y = -0.1 (cos - sin) from the centre, moves down at alpha times that
+  // lever; spinning at w, the contact point (midway across the gap, 1e-5 m below the edge) is
+  // drawn up towards the centre at w^2 times its depth below it. The pressing acceleration g_n
+  // is their sum, not the centre's.
+  const double th = 20.0 * kPi / 180.0, c = std::cos(th), s = std::sin(th);
+  const double alpha = 50.0;
+  auto pressing = [&](double w, const Vec3* angular) {
+    Body cube = test::box_body("cube", Vec3(0.1, 0.1, 0.1), 1.0, Vec3(0, 0, 0.1 * (s + c) + 2e-5),
+                               test::about(Vec3::UnitX(), th), Vec3::Zero(), Vec3(w, 0, 0));
+    const Posed posed(cube, test::fixed_ground());
+    const Vec3 still = Vec3::Zero();
+    const ContactSide held{BodyId{0}, posed.body1, posed.g1, posed.body1.state, &still, angular};
+    return make_contact(held, posed.side2(), posed.closest, posed.settings, kGravity, true).g_n;
+  };
+  const Vec3 tipping(alpha, 0, 0), lifting(-alpha, 0, 0);
+  CHECK(pressing(0.0, &tipping) == Approx(alpha * 0.1 * (c - s)).epsilon(1e-9));
+  CHECK(pressing(2.0, &tipping) ==
+        Approx(alpha * 0.1 * (c - s) - 4.0 * (0.1 * (s + c) + 1e-5)).epsilon(1e-9));
+  CHECK(pressing(0.0, &lifting) == 0.0);
+  // A body held at this instant, its plan pending, counts as held still: no rotation's terms.
+  CHECK(pressing(2.0, nullptr) == 0.0);
+  // A held ball rolling and turning faster: its gap's acceleration is its centre's (zero), though
+  // its material point at the contact is drawn up at w^2 R.
+  Body ball = test::sphere_body("ball", 0.1, 1.0, Vec3(0, 0, 0.1 + 2e-5));
+  ball.state.w_W = Vec3(5.0, 0, 0);
+  const Posed rolling(ball, test::fixed_ground());
+  const Vec3 down(0, 0, -1.0);
+  const ContactSide held_ball{BodyId{0},           rolling.body1, rolling.g1,
+                              rolling.body1.state, &down,         &tipping};
+  CHECK(make_contact(held_ball, rolling.side2(), rolling.closest, rolling.settings, kGravity, true)
+            .g_n == Approx(1.0).epsilon(1e-12));
+}
+
 TEST_CASE("contact: the energy a collision may create is the integration's and the floor's",
           "[contact]") {
   // Without gravity nothing presses the contact: the allowance is the integration tolerance
