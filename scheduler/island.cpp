@@ -1880,16 +1880,17 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
     }
     for (std::size_t k = 0; k < bodies.size(); ++k) {
       const Eigen::Index o = static_cast<Eigen::Index>(kPerBody * k);
-      // Accelerations: a clocked step's stages are derivatives in sigma, dt/dsigma times them.
-      auto acceleration = [&](const dopri5::State& kk) -> Vec3 {
-        return clocked ? Vec3(kk.segment<3>(o + 7) * speed_scale / kk(time_index))
-                       : Vec3(kk.segment<3>(o + 7));
+      // A stage's rate of the three components at `at` (o + 7: the acceleration, o + 10: the
+      // angular acceleration). A clocked step's stages are derivatives in sigma, dt/dsigma
+      // times them.
+      auto rate = [&](const dopri5::State& kk, Eigen::Index at) -> Vec3 {
+        return clocked ? Vec3(kk.segment<3>(at) * speed_scale / kk(time_index))
+                       : Vec3(kk.segment<3>(at));
       };
+      auto acceleration = [&](const dopri5::State& kk) { return rate(kk, o + 7); };
       if (steps_.empty()) {
         a_start[k] = acceleration(step.k[0]);
-        alpha_start[k] =
-            clocked ? Vec3(step.k[0].segment<3>(o + 10) * speed_scale / step.k[0](time_index))
-                    : Vec3(step.k[0].segment<3>(o + 10));
+        alpha_start[k] = rate(step.k[0], o + 10);
       }
       for (const dopri5::State& kk : step.k) {
         a_max[k] = std::max(a_max[k], (acceleration(kk) - a_start[k]).norm());

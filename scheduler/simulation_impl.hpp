@@ -88,25 +88,23 @@ struct Simulation::Impl {
     Body& b = body(id);
     if (t > b.state.t) b.state = extrapolate(id, t);
   }
-  // A held body's acceleration (its island's), or null for free flight.
-  // A body held at this instant whose island's plan is pending counts as held still (zero): it
-  // was just stopped along its contact, and what touches it now meets it (hold()).
-  const Vec3* held_acceleration(BodyId id) const {
-    static const Vec3 kStill = Vec3::Zero();
-    const Island* is = island(id);
-    if (!is) return nullptr;
-    if (is->plan_pending) return &kStill;
-    return &is->acceleration(static_cast<std::size_t>(is->index_of(id)));
-  }
-  // A held body's angular acceleration (its island's), or null.
-  const Vec3* held_angular_acceleration(BodyId id) const {
-    const Island* is = island(id);
-    if (!is || is->plan_pending) return nullptr;
-    return &is->angular_acceleration(static_cast<std::size_t>(is->index_of(id)));
-  }
+  // The body as the contact model sees it. A held body carries its island's accelerations (one
+  // lookup of it in the island, whose list is searched); free flight, none. A body held at this
+  // instant whose island's plan is pending counts as held still (zero, without rotation): it was
+  // just stopped along its contact, and what touches it now meets it (hold()).
   ContactSide side(BodyId id, const BodyState& s) const {
-    return ContactSide{
-        id, body(id), pairs.geometry(id), s, held_acceleration(id), held_angular_acceleration(id)};
+    static const Vec3 kStill = Vec3::Zero();
+    ContactSide out{id, body(id), pairs.geometry(id), s};
+    if (const Island* is = island(id)) {
+      if (is->plan_pending) {
+        out.acceleration_W = &kStill;
+      } else {
+        const std::size_t k = static_cast<std::size_t>(is->index_of(id));
+        out.acceleration_W = &is->acceleration(k);
+        out.angular_acceleration_W = &is->angular_acceleration(k);
+      }
+    }
+    return out;
   }
 
   // ---------------------------------------------------------------- pairs and bounds
