@@ -61,6 +61,7 @@ struct SimulationStats {
   std::uint64_t mode_changes = 0;       // island events (stick, slip, lift-off, tip, ...)
   std::uint64_t island_plans = 0;       // contact problems solved to plan a motion
   std::uint64_t rests = 0;              // islands put at rest
+  std::uint64_t rocking_ends = 0;       // bodies stopped at the end of a rocking train
   std::uint64_t held_inconsistent = 0;  // contact problems without a solution (let go)
   std::uint64_t stalled_islands = 0;    // islands that stopped making progress (let go)
   // Integrated island motions (Island::integration): Dormand-Prince steps accepted and rejected,

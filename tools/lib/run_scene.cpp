@@ -391,6 +391,7 @@ nlohmann::json summary_json(const RunResult& r) {
                      {"mode_changes", s.mode_changes},
                      {"island_plans", s.island_plans},
                      {"rests", s.rests},
+                     {"rocking_ends", s.rocking_ends},
                      {"held_inconsistent", s.held_inconsistent},
                      {"stalled_islands", s.stalled_islands},
                      {"island_steps", s.island_steps},
