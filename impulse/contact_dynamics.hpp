@@ -102,6 +102,8 @@ struct HeldContact {
   // A point contact of a sphere and a polyhedron's vertex or edge: how far the sphere's centre is
   // inside that feature's Voronoi region [m] (there the feature is the closest); +inf otherwise.
   double feature_margin = kInfinity;
+  // An edge of a polyhedron held across an edge of another (a point pair of two polyhedra).
+  bool edge_on_edge = false;
   // A polyhedral mover's contact point that runs along its edge (a point contact of the edge and
   // a sphere: the edge's point closest to the sphere's centre), its velocity over the mover [m/s]:
   // d/dt of the mover's velocity there gains w_mover x mover_slide_W. Zero for a material point.

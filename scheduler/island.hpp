@@ -85,6 +85,12 @@ struct HeldLink {
   // it leaves them (a ball pushing a turning pin passes from an edge over a face) the link lets
   // go, and the pair's check finds the feature that touches now. Empty: not watched.
   std::vector<VoronoiPlane> feature_region;
+  // An edge of a polyhedron held across an edge of another: feature_region is the mover's
+  // edge's Voronoi region (in its frame), watched at the support's closest point, and this the
+  // support's edge's (in the support's frame), watched at the mover's. While both closest points
+  // stay inside, they are the two convex bodies' closest points (V-Clip's condition), so nothing
+  // else of either body can touch the other. Empty otherwise.
+  std::vector<VoronoiPlane> support_region;
   // Modes, carried from one plan to the next (see HeldContact).
   bool sticks = true;
   Vec2 slip_dir = Vec2::UnitX();

@@ -59,7 +59,7 @@ const Expected kExpected[] = {
     {"balls_in_dish.json", 0x8cc2525db088a713ull},
     {"block_on_ramp_accelerating.json", 0x7baccee39ea4ad1eull},
     {"block_on_ramp_decelerating.json", 0x8369ce1c7eaca70aull},
-    {"bowling.json", 0x996e1c927f1aac7full},
+    {"bowling.json", 0x1e1c9daeed540242ull},
     {"chain_of_balls.json", 0x456c0368fae2634full},
     {"coins.json", 0x7285921116c68d1aull},
     {"cylinder_rolling_slope.json", 0x4bc4bf6ecb23e51aull},
