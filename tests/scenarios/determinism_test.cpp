@@ -61,7 +61,7 @@ const Expected kExpected[] = {
     {"block_on_ramp_decelerating.json", 0x8369ce1c7eaca70aull},
     {"bowling.json", 0x1e1c9daeed540242ull},
     {"chain_of_balls.json", 0x456c0368fae2634full},
-    {"coins.json", 0x7285921116c68d1aull},
+    {"coins.json", 0xbebe2f8f1b1b72eaull},
     {"cylinder_rolling_slope.json", 0x4bc4bf6ecb23e51aull},
     {"eulers_disk.json", 0x55c68a6f573a9060ull},
     {"pool_break.json", 0xe1c1d57e3de8b6ffull},

@@ -22,4 +22,22 @@ for spec in "100 sphere 0.26 --seed 2" "50 sphere 0.3 --seed 7" "30 hull 0.3 --s
     fail=1
   fi
 done
+# Rest, judged from the trace alone (tools/stacks/judge.py): 50 hulls over 10 s. Seed 5 kept a
+# lone hull rocking on the floor for ever (each fourth quiet landing kicked it back up at v_micro)
+# and a cluster pumped by microcollisions between hulls leaning edge on edge; seed 8 left a hull
+# in a microcollision train on the floor (its quick releases never forgotten). About 9 s of CPU.
+for seed in 5 8; do
+  scene="$work/rest$seed.json"
+  "$python" "$source_dir/tools/stacks/pile.py" 50 hull 10 --seed "$seed" >"$scene" || { echo "FAIL pile.py seed $seed"; fail=1; continue; }
+  if "$palpable" run "$scene" --trace "$work/rest$seed.csv" >/dev/null 2>"$work/err"; then
+    verdict=$("$python" "$source_dir/tools/stacks/judge.py" "$work/rest$seed.csv" | tail -1)
+    case "$verdict" in
+      *"AT REST"*) echo "ok   50 hulls, seed $seed, at rest by 10 s: $verdict" ;;
+      *) echo "FAIL 50 hulls, seed $seed, not at rest by 10 s: $verdict"; fail=1 ;;
+    esac
+  else
+    echo "FAIL pile 50 hull 10 --seed $seed (exit $?): $(tail -c 400 "$work/err")"
+    fail=1
+  fi
+done
 exit $fail
