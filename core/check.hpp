@@ -5,6 +5,7 @@
 //  - InputError: bad input at a boundary (scene file, command line, public constructor), with the
 //    JSON path or argument name it concerns and what was expected;
 //  - numerical trouble inside algorithms is a status in the result and a counter, never a throw.
+#include <cstdio>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -27,6 +28,13 @@ class InputError : public std::runtime_error {
  private:
   std::string where_;
 };
+
+// A number for a message, with the digits that matter (std::to_string prints 1e-9 as 0.000000).
+inline std::string significant(double x) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.3g", x);
+  return buffer;
+}
 
 namespace detail {
 [[noreturn]] inline void check_failed(const char* condition, const char* file, int line,

@@ -28,15 +28,6 @@ namespace palpable {
 
 namespace {
 
-// A length for a message, to three significant digits (std::to_string's fixed six decimals
-// printed a tolerance of 1e-9 m as 0.000000).
-std::string metres(double x) {
-  std::ostringstream out;
-  out.precision(3);
-  out << x;
-  return out.str();
-}
-
 struct Facet {
   std::vector<int> vertices;  // input point indices
   std::vector<int> neighbours;
@@ -71,14 +62,14 @@ void check_points(const std::vector<Vec3>& points, double tolerance_m, double di
     }
   }
   if (b_distance <= tolerance_m) {
-    throw InputError("points", "the points are collinear (within " + metres(tolerance_m) +
+    throw InputError("points", "the points are collinear (within " + significant(tolerance_m) +
                                    " m of a line); a solid needs 4 points not in one plane");
   }
   const Vec3 normal = axis.cross(points[b] - p0).normalized();
   double thickness = 0.0;
   for (const Vec3& p : points) thickness = std::max(thickness, std::abs(normal.dot(p - p0)));
   if (thickness <= tolerance_m) {
-    throw InputError("points", "the points are coplanar (within " + metres(tolerance_m) +
+    throw InputError("points", "the points are coplanar (within " + significant(tolerance_m) +
                                    " m of a plane); a solid needs 4 points not in one plane");
   }
 }

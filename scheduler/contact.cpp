@@ -545,13 +545,6 @@ bool carries_riders(const Contact& c, const Settings& settings, const Vec3& grav
   return n_up.dot(-gravity_W.normalized()) > kSupportCosine;
 }
 
-// A number for a message, with the digits that matter (std::to_string prints 1e-9 as 0.000000).
-[[maybe_unused]] std::string significant(double x) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.3g", x);
-  return buffer;
-}
-
 namespace {
 
 // A face resting on a face does not rock: the pressure over the patch takes out the small
