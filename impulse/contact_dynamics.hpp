@@ -224,7 +224,9 @@ HeldViolation worst_violation(const std::vector<HeldContact>& contacts, const He
 // its boundary (tipping: a polygon becomes the edge it crosses, a segment its end; a sliding one
 // is then resisted against its slip there), a sticking group beyond its bound slides in the
 // direction its sliding acceleration points (the same unique direction as the impulse
-// integrator's unstable stick, at the acceleration level).
+// integrator's unstable stick, at the acceleration level). Contacts that start to slide together
+// have their directions chosen again, one at a time, until each slip grows along its own
+// direction (to 1e-3 rad) under the modes of all.
 // Returns the final solution; `changes` counts the mendings.
 struct HeldModes {
   HeldSolution solution;

@@ -639,3 +639,68 @@ TEST_CASE("held: two dynamic spheres' slip rate is the derivative of their slip 
     CHECK(std::abs(s.motion[0].slip_rate_W.dot(k.n_W) + k.n_dot_W.dot(now.slip_W)) <= 1e-9);
   }
 }
+
+TEST_CASE("held: contacts that start to slide from rest together slide along their accelerations",
+          "[impulse][held]") {
+  // A ball wedged at rest between the floor and a leaning wall, pushed by a random force, and a
+  // second ball on it against a second wall: contacts that cannot stick start to slide, each
+  // along the direction its slip accelerates in under the modes of all (chosen one at a time, the
+  // first one's direction is consistent only with the others sticking, and its slip turns back
+  // at once). Fixed seed; every case must end with each slide along its acceleration, or let go.
+  unsigned state = 12345u;
+  auto uniform = [&](double lo, double hi) {
+    state = state * 1664525u + 1013904223u;
+    return lo + (hi - lo) * static_cast<double>(state >> 8) / static_cast<double>(1u << 24);
+  };
+  int started = 0, unsettled = 0, released = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const double r = 0.05;
+    const bool two = trial % 2 == 1;
+    std::vector<HeldBody> bodies = {ball(uniform(0.1, 1.0), r, Vec3(0, 0, r))};
+    std::vector<HeldContact> contacts;
+    contacts.push_back(on_plane(0, Vec3::Zero(), Vec3::UnitZ(), Vec3::UnitX(), uniform(0.1, 1.0)));
+    // The wall leans over the ball: its normal points back at it, partly down.
+    const double lean = uniform(-0.6, 0.6), turn = uniform(0.0, 2.0 * kPi);
+    const Vec3 out(std::cos(turn), std::sin(turn), 0.0);
+    const Vec3 n = (-std::cos(lean) * out + std::sin(lean) * Vec3::UnitZ()).normalized();
+    const Vec3 t1 = n.cross(Vec3::UnitZ()).normalized();
+    contacts.push_back(on_plane(0, bodies[0].x_W - r * n, n, t1, uniform(0.1, 1.0)));
+    bodies[0].force_W += uniform(0.0, 3.0) * kG * bodies[0].mass *
+                         Vec3(uniform(-1, 1), uniform(-1, 1), uniform(-0.5, 0.5)).normalized();
+    if (two) {
+      // The second ball on the first, leaning on a second wall across.
+      const Vec3 up = Vec3(uniform(-0.5, 0.5), uniform(-0.5, 0.5), 1.0).normalized();
+      bodies.push_back(ball(uniform(0.1, 1.0), r, bodies[0].x_W + 2.0 * r * up));
+      HeldContact on = on_plane(1, bodies[0].x_W + r * up, up, up.cross(Vec3::UnitX()).normalized(),
+                                uniform(0.1, 1.0));
+      on.support = 0;
+      contacts.push_back(on);
+      const Vec3 m = Vec3(uniform(-1, 1), uniform(-1, 1), uniform(-0.3, 0.3)).normalized();
+      contacts.push_back(on_plane(1, bodies[1].x_W + r * m, -m,
+                                  (-m).cross(Vec3::UnitZ()).normalized(), uniform(0.1, 1.0)));
+      bodies[1].force_W += uniform(0.0, 3.0) * kG * bodies[1].mass * m;
+    }
+    const HeldModes modes = choose_held_modes(bodies, contacts, 1e-12, 1e-12);
+    if (modes.solution.status != HeldStatus::kOk || !modes.converged) {
+      ++unsettled;
+      continue;
+    }
+    released += static_cast<int>(modes.released.size());
+    CHECK(worst_violation(contacts, modes.solution, 1e-9).kind == HeldViolation::Kind::kNone);
+    for (std::size_t i = 0; i < contacts.size(); ++i) {
+      const HeldContact& c = contacts[i];
+      if (!c.active || c.sticks) continue;
+      ++started;
+      const Vec3 rate_W = modes.solution.motion[i].slip_rate_W;
+      const Vec2 rate(rate_W.dot(c.t1_W), rate_W.dot(c.t2_W));
+      if (rate.norm() <= 1e-9) continue;  // no acceleration: no direction to slide along
+      INFO("trial " << trial << " contact " << i);
+      CHECK(rate.dot(c.slip_dir) > 0.0);
+      CHECK(std::abs(rate.x() * c.slip_dir.y() - rate.y() * c.slip_dir.x()) <= 1e-3 * rate.norm());
+    }
+  }
+  // Most cases start something sliding, none is left unsettled, some let a contact go.
+  CHECK(started > 150);
+  CHECK(unsettled == 0);
+  CHECK(released > 0);
+}
