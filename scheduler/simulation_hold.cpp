@@ -37,13 +37,15 @@ CollisionRecord Simulation::Impl::collide_or_hold(std::uint32_t index, Contact& 
   // a factor at each landing, ever faster, to rest in finite time. From its fourth such landing
   // it is at that limit: struck plastically, it is held at rest on its fixed support, if it moves
   // no faster than the hand-over speed anywhere within its reach (what that takes out is below
-  // the energy the microcollision floor lends). (A microcollision instead, as at a quick round
-  // below, rebounded at the hand-over speed: a lone hull rocking on a narrow face took 9.8e-5 J
-  // at every fourth quiet landing, every 0.16 s, and never came to rest.) Landings that go on
-  // after it - a body that tips again from rest - give way to that microcollision from the
-  // eighth.
-  const BodyId zeno = zeno_end_mover(p, t);
-  const int round = zeno.valid() ? 0 : hold_round(p, t);
+  // the energy the microcollision floor lends); on a dynamic body, both are stopped if both are
+  // that slow (a hull rocking on a hull on the floor, struck by a microcollision at its fourth
+  // quiet landing, took 1.1e-5 J and rocked again, for 9 s). (A microcollision instead, as at a
+  // quick round below, rebounded at the hand-over speed: a lone hull rocking on a narrow face
+  // took 9.8e-5 J at every fourth quiet landing, every 0.16 s, and never came to rest.) Landings
+  // that go on after it - a body that tips again from rest - give way to that microcollision from
+  // the eighth.
+  const std::vector<BodyId> zeno = zeno_end_bodies(p, t);
+  const int round = !zeno.empty() ? 0 : hold_round(p, t);
   const std::optional<HeldLink> link = round >= 4 ? std::optional<HeldLink>() : link_of(index, dr);
   // Two bodies in free flight share gravity: nothing presses their contact, so a collision
   // between them is resolved with the scene's restitution and held only if it leaves them at
@@ -63,13 +65,18 @@ CollisionRecord Simulation::Impl::collide_or_hold(std::uint32_t index, Contact& 
   if (!link) c.v_micro = std::max(c.v_micro, v_hold);
   if ((gentle || round >= 2) && link) options.restitution = 0.0;
   CollisionRecord record = collide(p, c, t, options);
-  if (zeno.valid() && link) {
-    Body& m = body(zeno);
-    const double reach = pairs.geometry(zeno).reach();
-    if (m.state.v_W.norm() + m.state.w_W.norm() * reach <= v_hold) {
-      record.energy_change -= kinetic_energy(m, m.state);
-      m.state.v_W.setZero();
-      m.state.w_W.setZero();
+  if (!zeno.empty() && link) {
+    const auto slow = [&](BodyId id) {
+      const Body& m = body(id);
+      return m.state.v_W.norm() + m.state.w_W.norm() * pairs.geometry(id).reach() <= v_hold;
+    };
+    if (std::all_of(zeno.begin(), zeno.end(), slow)) {
+      for (BodyId id : zeno) {
+        Body& m = body(id);
+        record.energy_change -= kinetic_energy(m, m.state);
+        m.state.v_W.setZero();
+        m.state.w_W.setZero();
+      }
       ++stats.rocking_ends;
     }
   }
@@ -89,16 +96,17 @@ CollisionRecord Simulation::Impl::collide_or_hold(std::uint32_t index, Contact& 
   return record;
 }
 
-BodyId Simulation::Impl::zeno_end_mover(const PairSet::Pair& p, double t) const {
+std::vector<BodyId> Simulation::Impl::zeno_end_bodies(const PairSet::Pair& p, double t) const {
   if (p.quiet_landings < 4 || p.quiet_landings >= 8 || collision_round(p, t) >= 4 ||
       p.quick_releases >= 4) {
-    return BodyId{};
+    return {};
   }
   const Body& ba = body(p.a);
   const Body& bb = body(p.b);
-  if (ba.is_dynamic() && bb.motion == MotionKind::kFixed) return p.a;
-  if (bb.is_dynamic() && ba.motion == MotionKind::kFixed) return p.b;
-  return BodyId{};
+  if (ba.is_dynamic() && bb.motion == MotionKind::kFixed) return {p.a};
+  if (bb.is_dynamic() && ba.motion == MotionKind::kFixed) return {p.b};
+  if (ba.is_dynamic() && bb.is_dynamic()) return {p.a, p.b};
+  return {};
 }
 
 double Simulation::Impl::dynamic_reach(const PairSet::Pair& p) const {

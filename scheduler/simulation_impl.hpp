@@ -260,10 +260,10 @@ struct Simulation::Impl {
   // The speed of a fall from the plane's resolution (kPlaneResolution of the larger dynamic
   // body's reach, the height at which an island's landing events take a vertex as on the plane).
   double settle_speed(const PairSet::Pair& p) const;
-  // The dynamic body of pair `p` whose collision at t ends a rocking train (collide_or_hold):
-  // from its fourth quiet landing in a row, before its eighth, on a fixed support, not at a
-  // quick round. Invalid otherwise.
-  BodyId zeno_end_mover(const PairSet::Pair& p, double t) const;
+  // The dynamic bodies of pair `p` whose collision at t ends a rocking train (collide_or_hold):
+  // from its fourth quiet landing in a row, before its eighth, not at a quick round - the one
+  // on a fixed support, or both of two dynamic bodies. None otherwise (a kinematic support).
+  std::vector<BodyId> zeno_end_bodies(const PairSet::Pair& p, double t) const;
   // The larger reach of the pair's dynamic bodies [m] (0 if neither is dynamic).
   double dynamic_reach(const PairSet::Pair& p) const;
   // The hand-over speed of a contact: the microcollision speed of the bodies' weight along the
