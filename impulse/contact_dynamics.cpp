@@ -1041,6 +1041,34 @@ HeldModes choose_held_modes(const std::vector<HeldBody>& bodies, std::vector<Hel
   std::vector<int> returned;  // contacts brought back, once each (no cycling between two sets)
   std::vector<int> started;   // contacts that start to slide from rest, along a chosen direction
   int turns = 0;              // directions of `started` chosen again
+  // Contact i, sticking beyond its cone, starts to slide along the direction its sliding
+  // acceleration points (searched from `start`), and joins `started`. An edge across an edge
+  // lets go instead of sliding along such a direction: its contact point runs along both edges,
+  // and the slip found along one turned away from it within 1e-6 s, stopped, and was found again
+  // - an edge held across a hull's edge did so 37,000 times in 0.085 s. Where there is no such
+  // direction, it can neither stick nor slide: friction would drive the slip along every
+  // direction (the coupled contacts' Painleve case). It lets go, and is not brought back here:
+  // its pair's check meets it as a collision, whose impulse resolves what no force can. (Slid
+  // along the opposite of the friction sticking needed, an edge of one hull on the face of
+  // another, between two hulls sliding and spinning on the floor, was driven to the
+  // integration's slip floor and chattered there, in steps of 5e-9 s, until 1000 steps were
+  // rejected - every 1.1e-6 s of simulated time: a pile of 100 hulls did not finish.)
+  auto slide_from_rest = [&](int i, const Vec2& start) {
+    HeldContact& c = contacts[static_cast<std::size_t>(i)];
+    c.sticks = false;
+    const std::optional<Vec2> dir =
+        c.edge_on_edge
+            ? std::nullopt
+            : unstable_stick_direction(bodies, contacts, static_cast<std::size_t>(i), start);
+    if (dir) {
+      c.slip_dir = *dir;
+      if (std::find(started.begin(), started.end(), i) == started.end()) started.push_back(i);
+      return;
+    }
+    c.active = false;
+    out.released.push_back(i);
+    returned.push_back(i);
+  };
   for (;;) {
     out.solution = solve_held(bodies, contacts);
     if (out.solution.status != HeldStatus::kOk) return out;
@@ -1066,16 +1094,7 @@ HeldModes choose_held_modes(const std::vector<HeldBody>& bodies, std::vector<Hel
         }
         ++turns;
         ++out.changes;
-        HeldContact& c = contacts[static_cast<std::size_t>(turned)];
-        const std::optional<Vec2> dir = unstable_stick_direction(
-            bodies, contacts, static_cast<std::size_t>(turned), c.slip_dir);
-        if (dir) {
-          c.slip_dir = *dir;
-        } else {
-          c.active = false;
-          out.released.push_back(turned);
-          returned.push_back(turned);
-        }
+        slide_from_rest(turned, contacts[static_cast<std::size_t>(turned)].slip_dir);
         continue;
       }
       if (out.changes >= budget) {
@@ -1121,36 +1140,7 @@ HeldModes choose_held_modes(const std::vector<HeldBody>& bodies, std::vector<Hel
         c.roll_sticks = false;
         c.roll_dir = -f.rolling.normalized();
         break;
-      case HeldViolation::Kind::kSlip: {
-        c.sticks = false;
-        // An edge across an edge that cannot stick lets go (below) rather than slide along an
-        // unstable direction: its contact point runs along both edges, and the slip found along
-        // such a direction turned away from it within 1e-6 s, stopped, and was found again - an
-        // edge held across a hull's edge did so 37,000 times in 0.085 s.
-        const std::optional<Vec2> dir =
-            c.edge_on_edge
-                ? std::nullopt
-                : unstable_stick_direction(bodies, contacts, static_cast<std::size_t>(v.contact),
-                                           -f.friction.normalized());
-        if (dir) {
-          c.slip_dir = *dir;
-          if (std::find(started.begin(), started.end(), v.contact) == started.end()) {
-            started.push_back(v.contact);
-          }
-          break;
-        }
-        // It can neither stick nor slide: friction would drive the slip along every direction
-        // (the coupled contacts' Painleve case). It lets go, and is not brought back here: its
-        // pair's check meets it as a collision, whose impulse resolves what no force can. (Slid
-        // along the opposite of the friction sticking needed, an edge of one hull on the face of
-        // another, between two hulls sliding and spinning on the floor, was driven to the
-        // integration's slip floor and chattered there, in steps of 5e-9 s, until 1000 steps were
-        // rejected - every 1.1e-6 s of simulated time: a pile of 100 hulls did not finish.)
-        c.active = false;
-        out.released.push_back(v.contact);
-        returned.push_back(v.contact);
-        break;
-      }
+      case HeldViolation::Kind::kSlip: slide_from_rest(v.contact, -f.friction.normalized()); break;
     }
   }
 }
