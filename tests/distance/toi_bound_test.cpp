@@ -368,6 +368,40 @@ TEST_CASE("inside the target gap and receding: back down at the target gap, else
   }
 }
 
+TEST_CASE("inside the target gap receding at rounding: persistent aims at half the gap",
+          "[distance][toi]") {
+  // Two held balls of a pile, 4.4e-5 m apart inside the 5e-5 m target gap, at rest relative to
+  // each other up to rounding (receding at 1e-19 m/s) with the 1e-9 m/s^2 slack of an integrated
+  // island's motion. Taken as receding, the bound was -2b/a = 2e-10 s and shrank with b: a
+  // pile of 100 balls checked that pair 5.5 million times in 0.1 s and did not reach 10 s.
+  // Under the persistent model such a pair is at rest, and aims at half its present gap:
+  // sqrt(2 * 2.2e-5 / 1e-9) = 210 s. Receding faster than the still speed it is the receding
+  // branch's (the case above); under the microcollision model always.
+  ToiMotion ball, other;
+  ball.accel_slack = 1e-9;
+  DistanceResult closest;
+  closest.status = ContactStatus::kSeparated;
+  closest.distance = 4.4e-5;
+  closest.n_W = Vec3::UnitX();
+  Settings settings;
+  settings.contact_model = ContactModel::kPersistent;
+  for (const double speed : {1e-19, 1e-12, 0.9e-9}) {
+    CAPTURE(speed);
+    ball.v_W = Vec3(speed, 0.0, 0.0);
+    const ToiBound bound = toi_bound(ball, other, closest, 5e-5, settings);
+    const double half = solve_gap_closing(1e-9, -speed, 0.5 * closest.distance);
+    CHECK(bound.dt == half);
+    CHECK(bound.dt > 200.0);
+  }
+  // Faster than the still speed: the receding branch's (here back down at the target gap).
+  ball.v_W.x() = 1e-6;
+  CHECK(toi_bound(ball, other, closest, 5e-5, settings).dt ==
+        solve_return_to_gap(1e-9, -1e-6, closest.distance - 5e-5));
+  settings.contact_model = ContactModel::kMicrocollisions;
+  ball.v_W.x() = 1e-19;
+  CHECK(toi_bound(ball, other, closest, 5e-5, settings).dt == Approx(2e-19 / 1e-9).epsilon(1e-12));
+}
+
 TEST_CASE("the progress floor never carries a pair through contact", "[distance][toi]") {
   // A box face closing on a fixed plane at 1e4 m/s: the 1e-6 s floor alone would move it 1 cm,
   // a hundred envelopes. The floor is capped by the time the bound allows to close the whole
