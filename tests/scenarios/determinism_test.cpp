@@ -56,7 +56,7 @@ struct Expected {
 // The committed final-state hashes of the shipped scenes.
 const Expected kExpected[] = {
     {"ball_on_platter.json", 0x05f50177987f5e0bull},
-    {"balls_in_dish.json", 0x8cc2525db088a713ull},
+    {"balls_in_dish.json", 0x1fba74d3b68fff9cull},
     {"block_on_ramp_accelerating.json", 0x7baccee39ea4ad1eull},
     {"block_on_ramp_decelerating.json", 0x8369ce1c7eaca70aull},
     {"bowling.json", 0x1e1c9daeed540242ull},
