@@ -1163,7 +1163,7 @@ HeldModes choose_held_modes(const std::vector<HeldBody>& bodies, std::vector<Hel
   // opposite of the couple sticking needed), and joins `rolled`. `turned`: chosen again under
   // the modes the others took since, where its resistance now holds it, it sticks again.
   // (Rolled along the opposite of the couple alone, a ball on the floor of a pile, pressed by
-  // five others, met a rolling acceleration 130 degrees from it: its rolling turned back at
+  // five others, met a rolling acceleration 117 degrees from it: its rolling turned back at
   // once, stopped, and so again, 19,755 plans in 4e-4 s.)
   auto roll_from_rest = [&](int i, const Vec2& start, bool turned) {
     HeldContact& c = contacts[static_cast<std::size_t>(i)];

@@ -659,7 +659,7 @@ TEST_CASE("held: contacts that start to roll from rest roll along their rolling 
   // and torque, rolling resistance at both contacts: a contact whose resistance cannot hold it
   // starts to roll, along the direction its rolling accelerates in under the modes of all (the
   // opposite of the couple sticking needed is that direction only for a contact alone; in a
-  // pile of 100 balls a ball's rolling so started accelerated 130 degrees away from it, turned
+  // pile of 100 balls a ball's rolling so started accelerated 117 degrees away from it, turned
   // back at once, stopped, and so again, 19,755 times in 4e-4 s). Fixed seed; every case must
   // settle with each rolling along its acceleration.
   Uniform uniform{54321u};
