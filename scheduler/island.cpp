@@ -663,6 +663,16 @@ Vec2 plane_coords(const HeldContact& c, const Vec3& v) {
   return Vec2(v.dot(c.t1_W), v.dot(c.t2_W));
 }
 
+// A held contact's relative spin about its normal and its relative rolling, given its relative
+// angular velocity dw, as speeds at the contact's size (judged against the still speed, or the
+// integration's slip floor, when a spinning or rolling contact follows its direction).
+double spin_speed(const HeldContact& c, const Vec3& dw) {
+  return std::abs(dw.dot(c.n_W)) * (c.torsion_arm / std::max(c.friction, 1e-300));
+}
+double roll_speed(const HeldContact& c, const Vec3& dw) {
+  return plane_coords(c, dw).norm() * point_size(c);
+}
+
 // The bodies' states at time t: island bodies from `states`, the others extrapolated.
 // `follow`: sliding contacts take the direction of their present relative motion (see below);
 // `slip_before` and `dw_before`, each contact's slip and relative angular velocity at the
@@ -745,21 +755,20 @@ Problem build_problem(const Island& island, const World& world,
         const Vec2 before = plane_coords(c, (*slip_before)[i]);
         if (before.norm() > still) c.slip_dir = before.normalized();
       }
-      const double spin_arm = c.torsion_arm / std::max(c.friction, 1e-300);
-      const double spin = now[i].dw_W.dot(c.n_W);
-      const bool has_before = dw_before != nullptr && i < dw_before->size();
-      if (!c.spin_sticks && std::abs(spin) * spin_arm > still) {
-        c.spin_sign = spin > 0.0 ? 1.0 : -1.0;
-      } else if (!c.spin_sticks && has_before) {
-        const double before = (*dw_before)[i].dot(c.n_W);
-        if (std::abs(before) * spin_arm > still) c.spin_sign = before > 0.0 ? 1.0 : -1.0;
+      // The relative angular velocity a spin or rolling follows: the present one above the
+      // floor, below it the step start's where that was above it, else none (the plan's).
+      const Vec3* before =
+          dw_before != nullptr && i < dw_before->size() ? &(*dw_before)[i] : nullptr;
+      auto followed = [&](double (*speed)(const HeldContact&, const Vec3&)) -> const Vec3* {
+        if (speed(c, now[i].dw_W) > still) return &now[i].dw_W;
+        if (before != nullptr && speed(c, *before) > still) return before;
+        return nullptr;
+      };
+      if (const Vec3* dw = c.spin_sticks ? nullptr : followed(spin_speed)) {
+        c.spin_sign = dw->dot(c.n_W) > 0.0 ? 1.0 : -1.0;
       }
-      const Vec2 roll = plane_coords(c, now[i].dw_W);
-      if (!c.roll_sticks && roll.norm() * point_size(c) > still) {
-        c.roll_dir = roll.normalized();
-      } else if (!c.roll_sticks && has_before) {
-        const Vec2 before = plane_coords(c, (*dw_before)[i]);
-        if (before.norm() * point_size(c) > still) c.roll_dir = before.normalized();
+      if (const Vec3* dw = c.roll_sticks ? nullptr : followed(roll_speed)) {
+        c.roll_dir = plane_coords(c, *dw).normalized();
       }
     }
   }
@@ -1760,20 +1769,18 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
     // The slips at a step's start change the problem only through a sliding (spinning,
     // rolling) contact below the floor (build_problem): without one, the problem solved at this
     // state is still the same.
+    const double still = std::max(world.settings.still_speed_mps, slip_floor);
     bool changes = false;
     for (std::size_t i = 0; i < m.size(); ++i) {
       slip_before[i] = m[i].slip_W;
       dw_before[i] = m[i].dw_W;
       const HeldContact& c = p.contacts[i];
-      const double still = std::max(world.settings.still_speed_mps, slip_floor);
       const bool spins = c.torsion_arm > 0.0 && !c.spin_sticks;
       const bool rolls =
           c.patch == PatchKind::kPoint && c.rolling_resistance > 0.0 && !c.roll_sticks;
       changes = changes || (!c.sticks && plane_coords(c, m[i].slip_W).norm() <= slip_floor) ||
-                (spins &&
-                 std::abs(m[i].dw_W.dot(c.n_W)) * (c.torsion_arm / std::max(c.friction, 1e-300)) <=
-                     still) ||
-                (rolls && plane_coords(c, m[i].dw_W).norm() * point_size(c) <= still);
+                (spins && spin_speed(c, m[i].dw_W) <= still) ||
+                (rolls && roll_speed(c, m[i].dw_W) <= still);
     }
     if (changes) ++start;
   };
