@@ -453,25 +453,31 @@ bool point_pair_normal(const HeldLink& link, const BodyState& mover, const BodyS
     return u >= -1e-9 && u <= 1.0 + 1e-9;
   };
   // Within the polyhedron's feature's Voronoi region: the sphere's centre, in its body frame.
-  // Two polyhedra's edges: each edge's region, at the other's closest point.
+  // Two polyhedra's edges: each edge's region, at a point of the other's side one edge length
+  // from its closest point along the normal. (Touching, the closest points lie on both edges,
+  // on the boundary of both regions whatever the edges' directions; it is the normal that
+  // leaves an edge's region when the other edge turns to lie in one of its faces, as V-Clip
+  // tests edge against edge. At the closest points themselves a box edge turning across a fixed
+  // ridge's edge went on down into the ridge's face, 6 cm deep.)
+  double size = std::max(link.sphere_radius, link.support_sphere_radius);
+  const bool edges = !link.support_region.empty();
+  if (edges) size = std::max((m[1] - m[0]).norm(), (s[1] - s[0]).norm());
   double margin = kInfinity;
   if (!link.feature_region.empty()) {
     const bool on_mover = link.sphere_radius == 0.0;
     const BodyState& poly = on_mover ? mover : support;
-    const Vec3 other_W = !link.support_region.empty() ? q_s : on_mover ? support.x_W : mover.x_W;
+    const Vec3 other_W = edges ? Vec3(q_s - size * n) : on_mover ? support.x_W : mover.x_W;
     const Vec3 centre_B = (on_mover ? R_M : R_S).transpose() * (other_W - poly.x_W);
     for (const VoronoiPlane& plane : link.feature_region) {
       margin = std::min(margin, plane.eval(centre_B));
     }
   }
-  if (!link.support_region.empty()) {
-    const Vec3 q_B = R_S.transpose() * (q_m - support.x_W);
+  if (edges) {
+    const Vec3 q_B = R_S.transpose() * (q_m + size * n - support.x_W);
     for (const VoronoiPlane& plane : link.support_region)
       margin = std::min(margin, plane.eval(q_B));
   }
   if (region_margin) *region_margin = margin;
-  double size = std::max(link.sphere_radius, link.support_sphere_radius);
-  if (!link.support_region.empty()) size = std::max((m[1] - m[0]).norm(), (s[1] - s[0]).norm());
   return within(m, q_m) && within(s, q_s) && margin >= -1e-9 * size;
 }
 

@@ -59,7 +59,7 @@ const Expected kExpected[] = {
     {"balls_in_dish.json", 0x1fba74d3b68fff9cull},
     {"block_on_ramp_accelerating.json", 0x7baccee39ea4ad1eull},
     {"block_on_ramp_decelerating.json", 0x8369ce1c7eaca70aull},
-    {"bowling.json", 0x1e1c9daeed540242ull},
+    {"bowling.json", 0x8e39c5177377c556ull},
     {"chain_of_balls.json", 0xc8bbf1d431751a6cull},
     {"coins.json", 0xbebe2f8f1b1b72eaull},
     {"cylinder_rolling_slope.json", 0x4bc4bf6ecb23e51aull},

@@ -815,6 +815,35 @@ TEST_CASE("edge on edge: a box edge landing on a box edge, crossed and parallel"
     }
 }
 
+TEST_CASE("edge across edge: a box held across a ridge turns off it without entering it",
+          "[extremes]") {
+  // The crossed landing above, turned about the vertical and off the ridge's middle: the box is
+  // held edge across edge and tips, its edge turning down towards one of the ridge's faces.
+  // When it lies in that face the two edges are no longer the closest features (the normal left
+  // the ridge edge's normal cone) and the hold must end there. Judged at the closest points
+  // themselves, where both edges' regions always hold them, the hold went on: 9 of these 16
+  // went 0.7 to 1.8 mm into the ridge (the harness' depth check: at most one envelope).
+  const double a = 0.05;
+  for (const double yaw : {-0.3, -0.15, 0.15, 0.3})
+    for (const double x0 : {-0.025, 0.025})
+      for (const double mu : {0.3, 1.0}) {
+        CAPTURE(yaw, x0, mu);
+        Run spec;
+        spec.world.settings.contact_model = ContactModel::kPersistent;
+        spec.world.default_material = Material{mu, 0.3};
+        spec.world.add(ground());
+        spec.world.add(fixed_body("lower", ConvexPolyhedron::box(Vec3(a, 0.1, a)),
+                                  Vec3(0, 0, a * std::sqrt(2.0)), about(Vec3(0, 1, 0), kPi / 4)));
+        const Quat q = about(Vec3(0, 0, 1), yaw) * about(Vec3(1, 0, 0), kPi / 4);
+        spec.world.add(box_body("upper", Vec3(0.1, a, a), 1.0,
+                                Vec3(x0, 0.002, 3 * a * std::sqrt(2.0) + 0.0101), q));
+        spec.t_end = 1.5;
+        spec.interval = 0.002;
+        spec.event_cap = resting_cap(spec, 10000, 32);
+        run_checked(spec);
+      }
+}
+
 // ==================================================================== kinematic platter
 
 namespace {
