@@ -1,5 +1,7 @@
 #include "impulse/collision_integrator.hpp"
 
+#include "core/event_location.hpp"
+
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 
@@ -479,31 +481,12 @@ class Solver {
   // The fraction theta in (0, 1] of the step at which the stage's event occurs (1: none inside),
   // found on the dense output by the Illinois variant of regula falsi to full precision.
   double locate_event(const State* k, double h, const State& y_new) const {
-    double g1 = event(p_z_ + h, y_new);
+    const double g1 = event(p_z_ + h, y_new);
     if (g1 < 0.0) return 1.0;
-    double a = 0.0, b = 1.0;
-    double ga = event(p_z_, y_);
-    if (ga >= 0.0) return 0.0;
-    double gb = g1;
-    int side = 0;
-    for (int iteration = 0; iteration < 200 && b - a > 1e-15; ++iteration) {
-      double m = (a * gb - b * ga) / (gb - ga);
-      if (!(m > a && m < b)) m = 0.5 * (a + b);
-      const double gm = event(p_z_ + m * h, dense(k, h, m));
-      if (gm >= 0.0) {
-        b = m;
-        gb = gm;
-        if (side == 1) ga *= 0.5;
-        side = 1;
-      } else {
-        a = m;
-        ga = gm;
-        if (side == -1) gb *= 0.5;
-        side = -1;
-      }
-      if (gm == 0.0) break;
-    }
-    return b;
+    const double g0 = event(p_z_, y_);
+    if (g0 >= 0.0) return 0.0;
+    return locate_crossing([&](double m) { return event(p_z_ + m * h, dense(k, h, m)); }, 0.0, g0,
+                           1.0, g1, 1e-15, 200);
   }
 
   void enter_restitution() {

@@ -3,6 +3,7 @@
 #include "core/ballistic.hpp"
 #include "core/check.hpp"
 #include "core/convex_polygon.hpp"
+#include "core/event_location.hpp"
 #include "impulse/microcollision.hpp"
 
 #include <algorithm>
@@ -1940,13 +1941,14 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
       if (!(g_prev[j].value >= -g_prev[j].tolerance && g_new[j].value < -g_new[j].tolerance)) {
         continue;
       }
-      double lo = 0.0, hi = 1.0;
-      for (int it = 0; it < 60 && hi - lo > 1e-15; ++it) {
-        const double mid = 0.5 * (lo + hi);
-        const std::vector<EventValue> gm = events(time_at(mid), y_at(mid));
-        const bool happened = j < gm.size() && gm[j].value < -gm[j].tolerance;
-        (happened ? hi : lo) = mid;
-      }
+      // Past its tolerance: -(value + tolerance) >= 0 (NaN where the function is missing).
+      auto past = [&](const EventValue& e) { return -(e.value + e.tolerance); };
+      const double hi = locate_crossing(
+          [&](double theta) {
+            const std::vector<EventValue> gm = events(time_at(theta), y_at(theta));
+            return j < gm.size() ? past(gm[j]) : NAN;
+          },
+          0.0, past(g_prev[j]), 1.0, past(g_new[j]), 1e-15, 200);
       if (hi < theta_event) {
         theta_event = hi;
         found = IslandEvent{g_new[j].kind, g_new[j].link};

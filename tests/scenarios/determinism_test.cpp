@@ -56,12 +56,12 @@ struct Expected {
 // The committed final-state hashes of the shipped scenes.
 const Expected kExpected[] = {
     {"ball_on_platter.json", 0x05f50177987f5e0bull},
-    {"balls_in_dish.json", 0x1fba74d3b68fff9cull},
+    {"balls_in_dish.json", 0xe8e9468d6e188d7aull},
     {"block_on_ramp_accelerating.json", 0x7baccee39ea4ad1eull},
     {"block_on_ramp_decelerating.json", 0x8369ce1c7eaca70aull},
-    {"bowling.json", 0x8e39c5177377c556ull},
+    {"bowling.json", 0xda78a6d4f13ae140ull},
     {"chain_of_balls.json", 0xc8bbf1d431751a6cull},
-    {"coins.json", 0xbebe2f8f1b1b72eaull},
+    {"coins.json", 0xb5c53b16f2c66041ull},
     {"cylinder_rolling_slope.json", 0x4bc4bf6ecb23e51aull},
     {"eulers_disk.json", 0x55c68a6f573a9060ull},
     {"pool_break.json", 0xe1c1d57e3de8b6ffull},
@@ -69,7 +69,7 @@ const Expected kExpected[] = {
     {"rattleback_kane_levinson.json", 0x2532c11745a46e48ull},
     {"rolling_coin.json", 0x373d3cc0b5b05554ull},
     {"sphere_slide_to_roll.json", 0x9f92366eb6da51e0ull},
-    {"tippe_top.json", 0x162fdae55915c13aull},
+    {"tippe_top.json", 0xc455a514a0158801ull},
 };
 
 }  // namespace
