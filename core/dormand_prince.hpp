@@ -6,6 +6,7 @@
 // decides what an event is and where a step must end.
 #include <Eigen/Core>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 
@@ -103,5 +104,29 @@ inline double next_step_size(double h, double error) {
   const double factor = 0.9 * std::pow(error, -0.2);
   return h * std::min(5.0, std::max(0.2, factor));
 }
+
+// The step sizes of an integration: next_step_size after each step, except that a step that
+// follows a rejection is no longer than the one that was accepted (Hairer, Norsett & Wanner,
+// Solving ODE I, 2nd ed., II.4: growing at once again after a rejection is rejected again). On
+// the Arenstorf orbit at 1e-9 it rejects 7 steps where next_step_size alone rejects 11, for the
+// same 502 accepted (tests/core/dormand_prince_test.cpp).
+class StepController {
+ public:
+  // The next step size after an accepted step of size h with error norm `error` (<= 1).
+  double accepted(double h, double error) {
+    const double next = next_step_size(h, error);
+    const bool after_rejection = rejected_;
+    rejected_ = false;
+    return after_rejection ? std::min(next, h) : next;
+  }
+  // The size to retry a rejected step of size h with error norm `error` (> 1, or NaN) at.
+  double rejected(double h, double error) {
+    rejected_ = true;
+    return next_step_size(h, error);
+  }
+
+ private:
+  bool rejected_ = false;
+};
 
 }  // namespace palpable::dopri5

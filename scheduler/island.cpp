@@ -1765,7 +1765,7 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
   dopri5::State y = pack(anchor_);
   dopri5::State k0 = rhs(t, y);
   const double cap = t0 + settings.broad_phase_horizon_s;
-  double h = std::min(1e-3, cap - t);
+  double h = std::min(step_hint_ > 0.0 ? step_hint_ : 1e-3, cap - t);
   // The state is the one last solved (the step's last stage, or the first right-hand side): its
   // problem is kept, and the velocities do not depend on the directions followed.
   auto record_step_start = [&](double time, const dopri5::State& state) {
@@ -1887,6 +1887,7 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
   choose_clock(t, y);
 
   dopri5::Step step;
+  dopri5::StepController controller;
   std::vector<double> w_max(bodies.size(), 0.0), a_max(bodies.size(), 0.0);
   std::vector<Vec3> a_start(bodies.size(), Vec3::Zero()), alpha_start(bodies.size(), Vec3::Zero());
   t_end = cap;
@@ -1918,7 +1919,7 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
     if (failed) break;
     if (std::isnan(step.error)) step.error = 1e10;  // rejected, and shrunk
     if (step.error > 1.0) {
-      h = g0 * dopri5::next_step_size(step.h, step.error);
+      h = g0 * controller.rejected(step.h, step.error);
       if (++integration.rejected > 1000 || h <= 1e-14 * std::max(1.0, t)) {
         failed = true;
         break;
@@ -1992,7 +1993,8 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
     landing_threshold.clear();
     g_prev = events(t, y);
     h = (clocked ? step.k[6](time_index) / speed_scale : 1.0) *
-        dopri5::next_step_size(step.h, step.error);
+        controller.accepted(step.h, step.error);
+    step_hint_ = h;
     choose_clock(t, y);
   }
   if (steps_.size() >= kMaxSteps && event.kind == IslandEvent::Kind::kSegmentEnd) t_end = t;

@@ -234,6 +234,10 @@ class Island {
   std::vector<dopri5::Step> steps_;
   // A clocked step's last component is the time since its start times this speed [m/s].
   double clock_scale_ = 1.0;
+  // The step the controller proposed after the island's last accepted step [s] (0: none yet):
+  // where the next integrated motion starts. (From 1 ms each time, the piles' motions spent 4.6
+  // rejected steps a motion finding their scale again: 12,628 of 28,546 rejections.)
+  double step_hint_ = 0.0;
   std::vector<MotionBound> bounds_;
   std::vector<bool> turning_;  // kUniform: w0 and alpha not parallel (orientation integrated)
   // Orientation of a sphere whose angular velocity turns (kUniform with w0 not parallel to alpha,

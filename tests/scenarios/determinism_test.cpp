@@ -56,20 +56,20 @@ struct Expected {
 // The committed final-state hashes of the shipped scenes.
 const Expected kExpected[] = {
     {"ball_on_platter.json", 0x05f50177987f5e0bull},
-    {"balls_in_dish.json", 0xe8e9468d6e188d7aull},
+    {"balls_in_dish.json", 0xb4be0dd14df1f46eull},
     {"block_on_ramp_accelerating.json", 0x7baccee39ea4ad1eull},
     {"block_on_ramp_decelerating.json", 0x8369ce1c7eaca70aull},
-    {"bowling.json", 0xda78a6d4f13ae140ull},
-    {"chain_of_balls.json", 0xc8bbf1d431751a6cull},
-    {"coins.json", 0xb5c53b16f2c66041ull},
+    {"bowling.json", 0xaf76ae327a73cab7ull},
+    {"chain_of_balls.json", 0x4ac3361c12be8a8cull},
+    {"coins.json", 0x053b496e9df02c27ull},
     {"cylinder_rolling_slope.json", 0x4bc4bf6ecb23e51aull},
-    {"eulers_disk.json", 0x55c68a6f573a9060ull},
+    {"eulers_disk.json", 0x9d712985d7fd5f43ull},
     {"pool_break.json", 0xe1c1d57e3de8b6ffull},
-    {"rattleback.json", 0x412a70583dfdf1c5ull},
-    {"rattleback_kane_levinson.json", 0x2532c11745a46e48ull},
-    {"rolling_coin.json", 0x373d3cc0b5b05554ull},
+    {"rattleback.json", 0xf1c23396bdea32ceull},
+    {"rattleback_kane_levinson.json", 0xfbb06d1d4f052638ull},
+    {"rolling_coin.json", 0xf5648a0a074d53b2ull},
     {"sphere_slide_to_roll.json", 0x9f92366eb6da51e0ull},
-    {"tippe_top.json", 0xc455a514a0158801ull},
+    {"tippe_top.json", 0x2e968dc5e3f0b2b9ull},
 };
 
 }  // namespace
