@@ -180,14 +180,23 @@ std::optional<CollisionRecord> Simulation::Impl::part_free_pair(const PairSet::P
                                                                 const Contact& c,
                                                                 const DistanceResult& contact,
                                                                 double t) {
-  if (!persistent() || !in_free_flight(p.a) || !in_free_flight(p.b) ||
-      contact.status == ContactStatus::kPenetrating || !(contact.distance <= touching_gap(p)) ||
-      !(c.v_micro > 0.0) || !(c.u_n < c.v_micro)) {
+  // Free, or held by an island whose motion is planned (not one joined at this instant).
+  const auto free_or_planned = [&](BodyId id) {
+    return in_free_flight(id) || (body(id).is_dynamic() && planned_island(id));
+  };
+  if (!persistent() || !(in_free_flight(p.a) || in_free_flight(p.b)) || !free_or_planned(p.a) ||
+      !free_or_planned(p.b) || contact.status == ContactStatus::kPenetrating ||
+      !(contact.distance <= touching_gap(p))) {
     return std::nullopt;
   }
+  // Against a held body the contact's own v_micro may be zero (its island holds it still along
+  // n): the hand-over speed, as a collision into it that is not held (collide_or_hold).
+  const bool held = !in_free_flight(p.a) || !in_free_flight(p.b);
+  const double v_part = held ? hand_over_speed(c) : c.v_micro;
+  if (!(v_part > 0.0) || !(c.u_n < v_part)) return std::nullopt;
   const double k = c.n_W.dot(collision_matrix_W(c.body1, c.body2) * c.n_W);
   if (!(k > 0.0)) return std::nullopt;
-  const Vec3 impulse = (c.v_micro - c.u_n) / k * c.n_W;  // on a; b takes the opposite
+  const Vec3 impulse = (v_part - c.u_n) / k * c.n_W;  // on a; b takes the opposite
   ContactBody after1 = c.body1, after2 = c.body2;
   apply_impulse(impulse, after1, after2);
   Body& a = body(p.a);
@@ -209,7 +218,11 @@ std::optional<CollisionRecord> Simulation::Impl::part_free_pair(const PairSet::P
   record.energy_change = kinetic_energy(a, a.state) + kinetic_energy(b, b.state) - before;
   ++stats.microcollisions;
   if (observer) observer->on_collision(record);
-  refresh_after_collision(record, t);
+  if (held) {
+    after_collision(record, t);  // the held body's island is planned again from its new velocity
+  } else {
+    refresh_after_collision(record, t);
+  }
   return record;
 }
 

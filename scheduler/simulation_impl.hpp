@@ -206,7 +206,11 @@ struct Simulation::Impl {
   // 1/2 m v_micro^2). Nothing else moves such a pair on: near contact the free-flight bound
   // aims at half the gap with the rotation's closing speed (|w| r ~ 0.1 m/s for a tumbling
   // hull), so a pair left 1e-13 m apart and parting at 4e-8 m/s was checked every 1e-12 s,
-  // 1.8 million times (100 hulls, seed 1). Returns the record, or nullopt if it does not apply.
+  // 1.8 million times (100 hulls, seed 1). So too a body in free flight and a body held by a
+  // planned island (parted at the hand-over speed; the island is planned again from its body's
+  // new velocity): a hull let go by a hull held on the floor, parting at 2e-5 m/s, hopped 5e-11 m
+  // and was checked 750,000 times in 10 us (50 hulls, seed 4). Returns the record, or nullopt if
+  // it does not apply.
   std::optional<CollisionRecord> part_free_pair(const PairSet::Pair& p, const Contact& c,
                                                 const DistanceResult& contact, double t);
   // A pair's event: collide if within the envelope and approaching — an impact at the instant
