@@ -1609,6 +1609,12 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
     const Solved& solution = solve_at(t, y);
     const Problem& p = solution.p;
     const HeldSolution& s = solution.s;
+    // Where the contact problem broke down without forces (not finite, at a state between a
+    // step's stages as an event is located on its dense output), no event is read from it: the
+    // step is not taken and the motion ends where it last held. (Read, its empty forces were
+    // indexed: a pile of 100 hulls crashed.)
+    const bool solved = s.forces.size() == links.size() && s.motion.size() == links.size();
+    if (!solved) failed = true;
     const std::vector<BodyState> states = unpack(y, t);
     const double still_speed = slip_floor;
     const double ftol = 1e-9 * weight;
@@ -1630,6 +1636,7 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
       out.push_back({IslandEvent::Kind::kRollStop, li, kInfinity, 0.0});
       out.push_back({IslandEvent::Kind::kLanding, li, kInfinity, 1e-12 * size});
       EventValue* e = &out[block];
+      if (!solved) continue;
       if (!c.active) {
         e[1].value = -1.0;  // the patch vanished: the mover left the support's face
         continue;
@@ -1955,6 +1962,7 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
         found = IslandEvent{g_new[j].kind, g_new[j].link};
       }
     }
+    if (failed) break;  // broke down within the step (above): it is not taken
     for (std::size_t k = 0; k < bodies.size(); ++k) {
       const Eigen::Index o = static_cast<Eigen::Index>(kPerBody * k);
       // A stage's rate of the three components at `at` (o + 7: the acceleration, o + 10: the
