@@ -238,6 +238,9 @@ class Island {
   // where the next integrated motion starts. (From 1 ms each time, the piles' motions spent 4.6
   // rejected steps a motion finding their scale again: 12,628 of 28,546 rejections.)
   double step_hint_ = 0.0;
+  // The integrated motion's slip floor [m/s] (Island::integrate): below it a slip, spin or
+  // rolling is at rest to what the motion resolves.
+  double slip_floor_ = 0.0;
   std::vector<MotionBound> bounds_;
   std::vector<bool> turning_;  // kUniform: w0 and alpha not parallel (orientation integrated)
   // Orientation of a sphere whose angular velocity turns (kUniform with w0 not parallel to alpha,
