@@ -680,6 +680,16 @@ double roll_speed(const HeldContact& c, const Vec3& dw) {
   return plane_coords(c, dw).norm() * point_size(c);
 }
 
+// Whether a held contact's slip (kind 0: friction), spin about its normal (1: torsion) or
+// rolling (2: rolling resistance, a point contact) slides rather than sticks.
+bool slides(const HeldContact& c, int kind) {
+  switch (kind) {
+    case 0: return c.friction > 0.0 && !c.sticks;
+    case 1: return c.torsion_arm > 0.0 && !c.spin_sticks;
+    default: return c.patch == PatchKind::kPoint && c.rolling_resistance > 0.0 && !c.roll_sticks;
+  }
+}
+
 // The bodies' states at time t: island bodies from `states`, the others extrapolated.
 // `follow`: sliding contacts take the direction of their present relative motion (see below);
 // `slip_before` and `dw_before`, each contact's slip and relative angular velocity at the
@@ -1067,18 +1077,12 @@ Island::PlanResult Island::plan(World& world, const std::vector<const ShapeGeome
       // motions much harder to integrate: seeds 17 and 22, 5 times the CPU.)
       if (integrated_floor > 0.0 && p.contacts[ci].active) {
         HeldContact& c = p.contacts[ci];
-        if (c.friction > 0.0 && !c.sticks &&
-            plane_coords(c, now[ci].slip_W).norm() <= integrated_floor) {
+        const Vec3& dw = now[ci].dw_W;
+        if (slides(c, 0) && plane_coords(c, now[ci].slip_W).norm() <= integrated_floor) {
           c.slip_stopped = true;
         }
-        if (c.torsion_arm > 0.0 && !c.spin_sticks &&
-            spin_speed(c, now[ci].dw_W) <= integrated_floor) {
-          c.spin_stopped = true;
-        }
-        if (c.patch == PatchKind::kPoint && c.rolling_resistance > 0.0 && !c.roll_sticks &&
-            roll_speed(c, now[ci].dw_W) <= integrated_floor) {
-          c.roll_stopped = true;
-        }
+        if (slides(c, 1) && spin_speed(c, dw) <= integrated_floor) c.spin_stopped = true;
+        if (slides(c, 2) && roll_speed(c, dw) <= integrated_floor) c.roll_stopped = true;
       }
     }
     std::vector<int> separating;
@@ -1815,12 +1819,9 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
       slip_before[i] = m[i].slip_W;
       dw_before[i] = m[i].dw_W;
       const HeldContact& c = p.contacts[i];
-      const bool spins = c.torsion_arm > 0.0 && !c.spin_sticks;
-      const bool rolls =
-          c.patch == PatchKind::kPoint && c.rolling_resistance > 0.0 && !c.roll_sticks;
       changes = changes || (!c.sticks && plane_coords(c, m[i].slip_W).norm() <= slip_floor) ||
-                (spins && spin_speed(c, m[i].dw_W) <= still) ||
-                (rolls && roll_speed(c, m[i].dw_W) <= still);
+                (slides(c, 1) && spin_speed(c, m[i].dw_W) <= still) ||
+                (slides(c, 2) && roll_speed(c, m[i].dw_W) <= still);
     }
     if (changes) ++start;
   };
@@ -1893,11 +1894,8 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
     for (std::size_t i = 0; i < links.size() && i < sol.s.motion.size(); ++i) {
       const HeldContact& c = sol.p.contacts[i];
       if (!c.active) continue;
-      const bool sliding[3] = {
-          c.friction > 0.0 && !c.sticks, c.torsion_arm > 0.0 && !c.spin_sticks,
-          c.patch == PatchKind::kPoint && c.rolling_resistance > 0.0 && !c.roll_sticks};
       for (int kind = 0; kind < 3; ++kind) {
-        if (!sliding[kind]) continue;
+        if (!slides(c, kind)) continue;
         const double speed = term_speed(c, sol.s.motion[i], kind);
         if (speed > slip_floor && speed < clock_speed &&
             term_rate(c, sol.s.motion[i], kind) < 0.0) {
