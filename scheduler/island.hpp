@@ -132,6 +132,13 @@ bool place_link(const HeldLink& link, const BodyState& mover, const BodyState& s
 // given states: its lowest point [m]; +inf for a link without one (a sphere, a curved point).
 double held_feature_height(const HeldLink& link, const BodyState& mover, const BodyState& support);
 
+// The edge of a link's support face (support_face_S, in the world at `support`) on which all
+// `points` lie, measured within the link's plane (along its normal), to 1e-9 of the face's size;
+// -1 if none (or the support offers no face). A reduced patch on such an edge tips the mover over
+// the support's edge: the link's roles turn round.
+int support_edge_under(const HeldLink& link, const BodyState& support,
+                       const std::vector<Vec3>& points);
+
 // The event that ends an island's present motion.
 struct IslandEvent {
   enum class Kind : std::uint8_t {
