@@ -11,13 +11,47 @@ The random draws are fixed by --seed, so a scene is reproduced by its command li
   build/tools/palpable run pile100s.json --summary-json pile100s.summary.json
 
 A layer holds at most as many bodies per row as fit inside the bin (so a pile of 100 or 200
-is stacked in layers instead of placed through the walls); piles of up to 64 bodies are
-placed as the first version of this script placed them.
+is stacked in layers instead of placed through the walls), and a hull's points lie in the
+0.05 m cube about its grid point (its centre of mass placed accordingly), so that no two
+bodies overlap; piles of up to 64 bodies are placed as the first version of this script
+placed them.
 """
 import argparse
 import json
 import math
 import random
+
+
+def hull_centre_of_mass(points):
+    """The centre of mass of the convex hull of `points` (uniform density): the hull's facets by
+    brute force (every triple whose plane has all points on one side; a dozen random points have
+    no four coplanar), then its volume in tetrahedra from an inner point."""
+    def sub(a, b):
+        return [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+
+    def cross(a, b):
+        return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+
+    def dot(a, b):
+        return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+    inner = [sum(p[k] for p in points) / len(points) for k in range(3)]
+    volume, moment = 0.0, [0.0, 0.0, 0.0]
+    m = len(points)
+    for i in range(m):
+        for j in range(i + 1, m):
+            for k in range(j + 1, m):
+                a, b, c = points[i], points[j], points[k]
+                normal = cross(sub(b, a), sub(c, a))
+                sides = [dot(normal, sub(q, a)) for q in points]
+                scale = 1e-12 * max(abs(x) for x in sides)
+                if not (all(x <= scale for x in sides) or all(x >= -scale for x in sides)):
+                    continue
+                v = abs(dot(normal, sub(inner, a))) / 6.0  # the tetrahedron (inner, a, b, c)
+                volume += v
+                for axis in range(3):
+                    moment[axis] += v * (inner[axis] + a[axis] + b[axis] + c[axis]) / 4.0
+    return [x / volume for x in moment]
 
 
 def pile(n, kind, end_time, seed=7, half_width=0.3):
@@ -44,6 +78,13 @@ def pile(n, kind, end_time, seed=7, half_width=0.3):
         else:
             pts = [[random.uniform(-0.025, 0.025) for _ in range(3)] for _ in range(12)]
             shape = {"type": "convex", "vertices": pts}
+            if n > 64:
+                # The hull's points lie in the 0.05 m cube about the grid point, so that no two
+                # hulls overlap: the scene's position is where the hull's centre of mass goes
+                # (scenarios/README.md), up to 0.035 m from the cube's centre. (Placed at the
+                # grid point, two hulls of the 200-hull pile of seed 1 overlapped.)
+                c = hull_centre_of_mass(pts)
+                x, y, z = x + c[0], y + c[1], z + c[2]
         bodies.append({"name": "p%d" % i, "mass": 0.1, "shape": shape, "position": [x, y, z],
                        "velocity": [random.uniform(-0.2, 0.2), random.uniform(-0.2, 0.2), 0]})
     material = {"default": {"friction": 0.5, "restitution": 0.3}}
