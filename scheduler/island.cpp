@@ -84,6 +84,7 @@ const char* to_string(IslandEvent::Kind kind) {
     case IslandEvent::Kind::kTip: return "tip";
     case IslandEvent::Kind::kLanding: return "landing";
     case IslandEvent::Kind::kSegmentEnd: return "segment_end";
+    case IslandEvent::Kind::kChunkEnd: return "chunk_end";
   }
   return "unknown";
 }
@@ -985,6 +986,7 @@ Island::PlanResult Island::plan(World& world, const std::vector<const ShapeGeome
   // The slip floor of the motion this plan ends, if it was integrated (else 0).
   const double integrated_floor = motion == Motion::kIntegrated ? slip_floor_ : 0.0;
   t0 = t;
+  planned_t_ = t;
   steps_.clear();
   integration = IntegrationCount{};
   orientation_cache_.clear();
@@ -1503,6 +1505,19 @@ void Island::classify(const World& world, const std::vector<const ShapeGeometry*
   integrate(world, geometry);
 }
 
+void Island::extend(const World& world, const std::vector<const ShapeGeometry*>& geometry,
+                    double t) {
+  t0 = t;
+  steps_.clear();
+  integration = IntegrationCount{};
+  for (std::size_t k = 0; k < bodies.size(); ++k) {
+    anchor_[k] = world.bodies[bodies[k].index].state;
+    anchor_[k].t = t;
+  }
+  event = IslandEvent{};
+  integrate(world, geometry, /*extending=*/true);
+}
+
 void Island::find_uniform_event(const World& world, const std::vector<HeldContact>& contacts,
                                 const HeldSolution& sol) {
   auto consider = [&](double dt, IslandEvent::Kind kind, std::size_t link) {
@@ -1575,7 +1590,8 @@ struct EventValue {
 
 }  // namespace
 
-void Island::integrate(const World& world, const std::vector<const ShapeGeometry*>& geometry) {
+void Island::integrate(const World& world, const std::vector<const ShapeGeometry*>& geometry,
+                       bool extending) {
   const Settings& settings = world.settings;
   const double rtol = settings.integration_tolerance;
   const double atol = rtol;
@@ -1589,12 +1605,18 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
   // Below this relative speed a slip (spin, rolling) counts as stopped along an integrated
   // motion: the integration resolves speeds to its tolerance times the motion's speed scale, and
   // a slip smaller than that only chatters in direction from step to step.
-  double speed_scale = std::sqrt(world.gravity_W.norm() * size);
-  for (std::size_t k = 0; k < bodies.size(); ++k) {
-    speed_scale = std::max(speed_scale, anchor_[k].v_W.norm() + anchor_[k].w_W.norm() * size);
+  // (Those of the plan: a motion gone on at a chunk's end keeps them, and its count of rejected
+  // steps.)
+  if (!extending) {
+    motion_rejected_ = 0;
+    speed_scale_ = std::sqrt(world.gravity_W.norm() * size);
+    for (std::size_t k = 0; k < bodies.size(); ++k) {
+      speed_scale_ = std::max(speed_scale_, anchor_[k].v_W.norm() + anchor_[k].w_W.norm() * size);
+    }
+    slip_floor_ = std::max(settings.still_speed_mps, 1e3 * rtol * speed_scale_);
   }
-  const double slip_floor = std::max(settings.still_speed_mps, 1e3 * rtol * speed_scale);
-  slip_floor_ = slip_floor;
+  const double speed_scale = speed_scale_;
+  const double slip_floor = slip_floor_;
   bool failed = false;
   // Each contact's slip and relative angular velocity at the start of the step (world): a
   // sliding contact whose slip turns against it within the step has passed through zero.
@@ -1811,7 +1833,7 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
   double t = t0;
   dopri5::State y = pack(anchor_);
   dopri5::State k0 = rhs(t, y);
-  const double cap = t0 + settings.broad_phase_horizon_s;
+  const double cap = planned_t_ + settings.broad_phase_horizon_s;
   double h = std::min(step_hint_ > 0.0 ? step_hint_ : 1e-3, cap - t);
   // The state is the one last solved (the step's last stage, or the first right-hand side): its
   // problem is kept, and the velocities do not depend on the directions followed.
@@ -1936,6 +1958,15 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
   // A segment of at most this many steps (its dense output is kept): a motion that needs more is
   // re-planned where it ends, so memory stays bounded whatever the motion does.
   constexpr std::size_t kMaxSteps = 4096;
+  // The motion is integrated kChunkSteps steps at a time (and at least the progress floor of
+  // time, so that a motion in tiny steps still advances): at a chunk's end it goes on (extend),
+  // with its pairs bounded again from there. Integrated to its next event at once, a motion in a
+  // pile was mostly cut short by a collision or a hold elsewhere in its island: 46 % of the steps
+  // of the first 0.4 s of a pile of 100 hulls were integrated past the instant their motion was
+  // replaced, and its pairs were bounded by the whole motion's accelerations. Chunks of 4, 8, 12
+  // and 32 steps: 13.5, 5.8, 7.6 and 12.0 s of CPU for that pile against 25.6 s (README).
+  constexpr std::size_t kChunkSteps = 8;
+  const double chunk_time = settings.toi_min_progress_s;
   const Eigen::Index time_index = static_cast<Eigen::Index>(n);
   while (t < cap && !failed && steps_.size() < kMaxSteps) {
     h = std::min(h, cap - t);
@@ -1961,7 +1992,8 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
     if (std::isnan(step.error)) step.error = 1e10;  // rejected, and shrunk
     if (step.error > 1.0) {
       h = g0 * controller.rejected(step.h, step.error);
-      if (++integration.rejected > 1000 || h <= 1e-14 * std::max(1.0, t)) {
+      ++integration.rejected;
+      if (++motion_rejected_ > 1000 || h <= 1e-14 * std::max(1.0, t)) {
         failed = true;
         break;
       }
@@ -2025,6 +2057,13 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
     }
     if (t1 >= cap) {  // a clocked step past the horizon
       t_end = cap;
+      break;
+    }
+    if (steps_.size() >= kChunkSteps && t1 - t0 >= chunk_time) {
+      t_end = t1;
+      event = IslandEvent{IslandEvent::Kind::kChunkEnd, -1};
+      step_hint_ = (clocked ? step.k[6](time_index) / speed_scale : 1.0) *
+                   controller.accepted(step.h, step.error);
       break;
     }
     t = t1;

@@ -151,6 +151,7 @@ struct IslandEvent {
     kTip,         // a centre of pressure reached its patch's boundary
     kLanding,     // another vertex of a held body reached the support plane
     kSegmentEnd,  // the integrated motion's segment ended (re-plan, re-bound)
+    kChunkEnd,    // an integrated motion's chunk ended: it goes on (extend), re-bound
   };
   Kind kind = Kind::kNone;
   int link = -1;
@@ -192,6 +193,12 @@ class Island {
   // chosen; links that let go are removed; the motion and its next event are found.
   PlanResult plan(World& world, const std::vector<const ShapeGeometry*>& geometry, double t);
 
+  // Goes on with the integrated motion whose chunk ended at time t (IslandEvent::kChunkEnd) from
+  // the bodies' states there, read from the world (committed at t), with the same links and
+  // modes: nothing is projected and no mode is chosen again - the motion is the one the plan
+  // found, integrated a chunk at a time.
+  void extend(const World& world, const std::vector<const ShapeGeometry*>& geometry, double t);
+
   // What the present motion's integration cost (Motion::kIntegrated; zero otherwise):
   // Dormand-Prince steps accepted and rejected, and whether the contact problem broke down along
   // the way (the motion then ends early, where it last held).
@@ -224,7 +231,10 @@ class Island {
                 const std::vector<HeldContact>& contacts, const HeldSolution& solution);
   void find_uniform_event(const World& world, const std::vector<HeldContact>& contacts,
                           const HeldSolution& solution);
-  void integrate(const World& world, const std::vector<const ShapeGeometry*>& geometry);
+  // From anchor_ at t0; `extending`: a chunk of the motion planned before (extend()), which keeps
+  // its speed scale and slip floor.
+  void integrate(const World& world, const std::vector<const ShapeGeometry*>& geometry,
+                 bool extending = false);
   Quat orientation_at(std::size_t k, double t) const;
   Vec3 angular_velocity_at(std::size_t k, double t) const;
 
@@ -248,6 +258,14 @@ class Island {
   // The integrated motion's slip floor [m/s] (Island::integrate): below it a slip, spin or
   // rolling is at rest to what the motion resolves.
   double slip_floor_ = 0.0;
+  double speed_scale_ = 1.0;  // the integrated motion's speed scale [m/s] (Island::integrate)
+  // Steps the integrated motion rejected since its plan, over all its chunks: past 1000 it breaks
+  // down and is planned again. (Counted per chunk, a motion chattering in steps of 3e-9 s, two
+  // rejected to one taken, went on for ever, 600 rejections a chunk: 50 hulls, seed 14.)
+  std::uint64_t motion_rejected_ = 0;
+  // When the present motion was planned (plan(); extend() keeps it): its integration ends, to be
+  // planned again, a broad-phase horizon after that.
+  double planned_t_ = 0.0;
   std::vector<MotionBound> bounds_;
   std::vector<bool> turning_;  // kUniform: w0 and alpha not parallel (orientation integrated)
   // Orientation of a sphere whose angular velocity turns (kUniform with w0 not parallel to alpha,

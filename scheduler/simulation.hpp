@@ -69,6 +69,7 @@ struct SimulationStats {
   std::uint64_t island_steps = 0;
   std::uint64_t island_rejected_steps = 0;
   std::uint64_t island_failed_motions = 0;
+  std::uint64_t island_chunks = 0;  // integrated motions gone on at a chunk's end (Island::extend)
 };
 
 // A held contact changing how it behaves, at its exact instant (persistent contact model).

@@ -462,6 +462,20 @@ void Simulation::Impl::island_event(std::uint32_t i, double t) {
     replan(i, t);
     return;
   }
+  if (is.event.kind == IslandEvent::Kind::kChunkEnd) {
+    // Its integration goes on from here, with the same links and modes; what its motion now
+    // bounds is bounded again (as after a plan).
+    is.extend(world, geometries, t);
+    ++stats.island_chunks;
+    stats.island_steps += is.integration.steps;
+    stats.island_rejected_steps += is.integration.rejected;
+    if (is.integration.failed) ++stats.island_failed_motions;
+    schedule_island(i, t);
+    const std::vector<BodyId> touched = is.bodies;
+    for (BodyId id : touched) refresh_broad_phase(id, t);
+    for (std::uint32_t index : pairs.collect_rebounds(touched)) rebound(index, t);
+    return;
+  }
   ++stats.mode_changes;
   const IslandEvent ev = is.event;
   is.trigger = ev;

@@ -56,20 +56,20 @@ struct Expected {
 // The committed final-state hashes of the shipped scenes.
 const Expected kExpected[] = {
     {"ball_on_platter.json", 0x05f50177987f5e0bull},
-    {"balls_in_dish.json", 0xe1f73e3b4bf02473ull},
+    {"balls_in_dish.json", 0x6dbed6e9ade58942ull},
     {"block_on_ramp_accelerating.json", 0x7baccee39ea4ad1eull},
     {"block_on_ramp_decelerating.json", 0x8369ce1c7eaca70aull},
-    {"bowling.json", 0xaf76ae327a73cab7ull},
-    {"chain_of_balls.json", 0x4ac3361c12be8a8cull},
-    {"coins.json", 0x053b496e9df02c27ull},
+    {"bowling.json", 0x97e5cf335e3c0007ull},
+    {"chain_of_balls.json", 0x42e3fa46cddd6d8dull},
+    {"coins.json", 0x809911329260d595ull},
     {"cylinder_rolling_slope.json", 0x4bc4bf6ecb23e51aull},
-    {"eulers_disk.json", 0x9d712985d7fd5f43ull},
+    {"eulers_disk.json", 0xaf30eba8493be1b7ull},
     {"pool_break.json", 0xe1c1d57e3de8b6ffull},
-    {"rattleback.json", 0xf1c23396bdea32ceull},
-    {"rattleback_kane_levinson.json", 0xfbb06d1d4f052638ull},
-    {"rolling_coin.json", 0xf5648a0a074d53b2ull},
+    {"rattleback.json", 0xc63f4131f2972f5aull},
+    {"rattleback_kane_levinson.json", 0xddaf8ae9034ea0c8ull},
+    {"rolling_coin.json", 0xcb95544cac3e7151ull},
     {"sphere_slide_to_roll.json", 0x9f92366eb6da51e0ull},
-    {"tippe_top.json", 0x2e968dc5e3f0b2b9ull},
+    {"tippe_top.json", 0xb0256fcc7c8b3d5full},
 };
 
 }  // namespace

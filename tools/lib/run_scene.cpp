@@ -396,7 +396,8 @@ nlohmann::json summary_json(const RunResult& r) {
                      {"stalled_islands", s.stalled_islands},
                      {"island_steps", s.island_steps},
                      {"island_rejected_steps", s.island_rejected_steps},
-                     {"island_failed_motions", s.island_failed_motions}};
+                     {"island_failed_motions", s.island_failed_motions},
+                     {"island_chunks", s.island_chunks}};
   const Settings& st = r.scene.world.settings;
   j["palpable"] = {{"version", kVersion}, {"commit", kGitCommit}};
   j["scene_path"] = r.scene.source;
@@ -416,8 +417,8 @@ std::string summary_text(const RunResult& r) {
       << "virtual time     " << r.scene.end_time << " s\n"
       << "wall time        " << std::setprecision(3) << r.wall_time_s << " s\n"
       << std::setprecision(6) << "events           " << s.events << "  (pair checks "
-      << s.pair_checks << ", horizon refreshes " << s.horizon_refreshes << ", samples " << s.samples
-      << ")\n"
+      << s.pair_checks << ", horizon refreshes " << s.horizon_refreshes << ", integration chunks "
+      << s.island_chunks << ", samples " << s.samples << ")\n"
       << "collisions       " << s.collisions << "  microcollisions " << s.microcollisions
       << "  (centre of pressure " << s.centre_of_pressure << ")\n"
       << "numerical        retries " << s.retries << ", retry-limit hits " << s.retry_limit_hits
