@@ -955,6 +955,26 @@ int turned_start(const std::vector<HeldContact>& contacts, const HeldSolution& s
   return worst;
 }
 
+// Of the contacts that started to spin from rest (`spun`) and spin still, the one whose spin now
+// accelerates against the sign chosen for it fastest (beyond the tolerance), or -1: the torsion
+// that let it go was judged under the others' modes of then.
+int turned_spin(const std::vector<HeldContact>& contacts, const HeldSolution& solution,
+                const std::vector<int>& spun, double acceleration_scale, double tolerance) {
+  int worst = -1;
+  double fastest = tolerance * acceleration_scale;
+  for (int i : spun) {
+    const HeldContact& c = contacts[static_cast<std::size_t>(i)];
+    if (!c.active || c.spin_sticks) continue;
+    const HeldContactMotion& m = solution.motion[static_cast<std::size_t>(i)];
+    const double against = -c.spin_sign * m.dalpha_W.dot(c.n_W) * turning_size(c);
+    if (against > fastest) {
+      fastest = against;
+      worst = i;
+    }
+  }
+  return worst;
+}
+
 // Of the directions d(theta) = (cos theta, sin theta) over the circle from `theta0`, the first
 // where rate(d) lies along d: a root of its component across d, cross(d, rate(d)), scanned in 72
 // steps and bisected, kept where the rate grows along d. Nullopt if there is none. `rate` returns
@@ -1129,6 +1149,7 @@ HeldModes choose_held_modes(const std::vector<HeldBody>& bodies, std::vector<Hel
   std::vector<int> returned;  // contacts brought back, once each (no cycling between two sets)
   std::vector<int> started;   // contacts that start to slide from rest, along a chosen direction
   std::vector<int> rolled;    // contacts that start to roll from rest (rolling resistance)
+  std::vector<int> spun;      // contacts that start to spin from rest (spinning resistance)
   int turns = 0;              // directions of `started` and `rolled` chosen again
   // Contact i, sticking beyond its cone, starts to slide along the direction its sliding
   // acceleration points (searched from `start`), and joins `started`. An edge across an edge
@@ -1199,9 +1220,13 @@ HeldModes choose_held_modes(const std::vector<HeldBody>& bodies, std::vector<Hel
                                     ? -1
                                     : turned_start(contacts, out.solution, rolled,
                                                    acceleration_scale, tolerance, /*rolling=*/true);
-        if (turned < 0 && turned_roll < 0) return out;
+        const int spin_turned =
+            turned >= 0 || turned_roll >= 0
+                ? -1
+                : turned_spin(contacts, out.solution, spun, acceleration_scale, tolerance);
+        if (turned < 0 && turned_roll < 0 && spin_turned < 0) return out;
         // (Turned one at a time, the directions converge linearly: about 3 times closer a round.)
-        if (turns >= 16 * static_cast<int>(started.size() + rolled.size())) {
+        if (turns >= 16 * static_cast<int>(started.size() + rolled.size() + spun.size())) {
           out.converged = false;
           return out;
         }
@@ -1209,6 +1234,13 @@ HeldModes choose_held_modes(const std::vector<HeldBody>& bodies, std::vector<Hel
         ++out.changes;
         if (turned >= 0) {
           slide_from_rest(turned, contacts[static_cast<std::size_t>(turned)].slip_dir);
+        } else if (spin_turned >= 0) {
+          // Chosen again under the modes the others took since: it sticks where its torsion now
+          // holds it, else it spins the way that torsion now gives (kSpin below). (Left spinning
+          // against its acceleration, a hull's floor patch, chosen sliding and spinning from
+          // rest under two hulls, stopped spinning 4e-8 s later, at once again and again, and
+          // its motions broke down: 50 hulls, seed 11.)
+          contacts[static_cast<std::size_t>(spin_turned)].spin_sticks = true;
         } else {
           const HeldContact& c = contacts[static_cast<std::size_t>(turned_roll)];
           roll_from_rest(
@@ -1257,6 +1289,7 @@ HeldModes choose_held_modes(const std::vector<HeldBody>& bodies, std::vector<Hel
       case HeldViolation::Kind::kSpin:
         c.spin_sticks = false;
         c.spin_sign = f.torsion > 0.0 ? -1.0 : 1.0;
+        if (std::find(spun.begin(), spun.end(), v.contact) == spun.end()) spun.push_back(v.contact);
         break;
       case HeldViolation::Kind::kRoll:
         roll_from_rest(v.contact, -f.rolling.normalized(), /*turned=*/false);
