@@ -62,7 +62,15 @@ CollisionRecord Simulation::Impl::collide_or_hold(std::uint32_t index, Contact& 
   // contact's own v_micro is zero where the islands on both sides hold their bodies still along
   // n: a hull leaning on a hull at rest beside it, both held, was struck 100 times at one
   // instant at 1e-43 m/s, each rebound sent back by its island's plan, until the retry limit.)
-  if (!link) c.v_micro = std::max(c.v_micro, v_hold);
+  // Where nothing presses it along its normal by weight (a hull held on the floor, pushed against
+  // a vertical wall by its island), the hand-over speed is zero too, and so was that rebound: the
+  // hull was struck 101 times at one instant, from 1e-33 m/s down to 1e-62 m/s, each rebound sent
+  // back by its island's plan, until the retry limit (100 hulls, seed 3). There it rebounds at
+  // the settling speed, a fall from the plane's resolution, the least the model resolves.
+  const bool held_pair = !(in_free_flight(a) && in_free_flight(b));
+  if (!link) {
+    c.v_micro = std::max({c.v_micro, v_hold, held_pair && !(v_hold > 0.0) ? settle_speed(p) : 0.0});
+  }
   if ((gentle || round >= 2) && link) options.restitution = 0.0;
   CollisionRecord record = collide(p, c, t, options);
   if (!zeno.empty() && link) {
