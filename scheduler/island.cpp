@@ -2059,13 +2059,15 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
       t_end = cap;
       break;
     }
+    // The controller's next step (in time), where this motion or its next chunk goes on.
+    step_hint_ = (clocked ? step.k[6](time_index) / speed_scale : 1.0) *
+                 controller.accepted(step.h, step.error);
     if (steps_.size() >= kChunkSteps && t1 - t0 >= chunk_time) {
       t_end = t1;
       event = IslandEvent{IslandEvent::Kind::kChunkEnd, -1};
-      step_hint_ = (clocked ? step.k[6](time_index) / speed_scale : 1.0) *
-                   controller.accepted(step.h, step.error);
       break;
     }
+    h = step_hint_;
     t = t1;
     y = y1;
     k0 = clocked ? dopri5::State(step.k[6].head(time_index) * speed_scale / step.k[6](time_index))
@@ -2073,9 +2075,6 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
     record_step_start(t, y);
     landing_threshold.clear();
     g_prev = events(t, y);
-    h = (clocked ? step.k[6](time_index) / speed_scale : 1.0) *
-        controller.accepted(step.h, step.error);
-    step_hint_ = h;
     choose_clock(t, y);
   }
   if (steps_.size() >= kMaxSteps && event.kind == IslandEvent::Kind::kSegmentEnd) t_end = t;

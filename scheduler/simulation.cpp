@@ -29,13 +29,17 @@ void Simulation::Impl::refresh_broad_phase(BodyId id, double t) {
   pairs.refresh(id, extrapolate(id, t), t);
 }
 
-void Simulation::Impl::refresh_after_collision(const CollisionRecord& r, double t) {
-  std::vector<BodyId> moved{r.a, r.b};
-  moved.insert(moved.end(), r.carried.begin(), r.carried.end());
+void Simulation::Impl::refresh_moved(const std::vector<BodyId>& moved, double t) {
   for (BodyId id : moved) {
     if (body(id).is_dynamic()) refresh_broad_phase(id, t);
   }
   for (std::uint32_t index : pairs.collect_rebounds(moved)) rebound(index, t);
+}
+
+void Simulation::Impl::refresh_after_collision(const CollisionRecord& r, double t) {
+  std::vector<BodyId> moved{r.a, r.b};
+  moved.insert(moved.end(), r.carried.begin(), r.carried.end());
+  refresh_moved(moved, t);
 }
 
 void Simulation::Impl::schedule_pair(std::uint32_t index, double t_next) {

@@ -336,9 +336,7 @@ void Simulation::Impl::replan(std::uint32_t i, double t) {
     const Island::PlanResult r = is.plan(world, geometries, t);
     ++stats.island_plans;
     if (r.inconsistent) ++stats.held_inconsistent;
-    stats.island_steps += is.integration.steps;
-    stats.island_rejected_steps += is.integration.rejected;
-    if (is.integration.failed) ++stats.island_failed_motions;
+    count_integration(is);
     for (std::uint32_t pair : r.released) {
       PairSet::Pair& q = pairs.pair(pair);
       q.held = false;
@@ -368,10 +366,13 @@ void Simulation::Impl::replan(std::uint32_t i, double t) {
     schedule_island(k, t);
   }
   for (std::uint32_t pair : let_go) part_released(pair, t);
-  for (BodyId id : touched) {
-    if (body(id).is_dynamic()) refresh_broad_phase(id, t);
-  }
-  for (std::uint32_t index : pairs.collect_rebounds(touched)) rebound(index, t);
+  refresh_moved(touched, t);
+}
+
+void Simulation::Impl::count_integration(const Island& is) {
+  stats.island_steps += is.integration.steps;
+  stats.island_rejected_steps += is.integration.rejected;
+  if (is.integration.failed) ++stats.island_failed_motions;
 }
 
 std::vector<std::uint32_t> Simulation::Impl::split(std::uint32_t k, double t, bool& changed) {
@@ -475,13 +476,9 @@ void Simulation::Impl::island_event(std::uint32_t i, double t) {
     // bounds is bounded again (as after a plan).
     is.extend(world, geometries, t);
     ++stats.island_chunks;
-    stats.island_steps += is.integration.steps;
-    stats.island_rejected_steps += is.integration.rejected;
-    if (is.integration.failed) ++stats.island_failed_motions;
+    count_integration(is);
     schedule_island(i, t);
-    const std::vector<BodyId> touched = is.bodies;
-    for (BodyId id : touched) refresh_broad_phase(id, t);
-    for (std::uint32_t index : pairs.collect_rebounds(touched)) rebound(index, t);
+    refresh_moved(is.bodies, t);
     return;
   }
   ++stats.mode_changes;

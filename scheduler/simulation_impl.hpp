@@ -118,6 +118,11 @@ struct Simulation::Impl {
   // body for a halfspace, whose box is infinite: it is skipped. So for a kinematic body, whose
   // box follows only time (its horizon event keeps it current).
   void refresh_after_collision(const CollisionRecord& r, double t);
+  // Bodies whose motion changed at t (a collision, a plan, an integrated motion's next chunk):
+  // their swept boxes and every pair of theirs are bounded again.
+  void refresh_moved(const std::vector<BodyId>& moved, double t);
+  // What an island's present motion (or chunk of it) cost to integrate, into the statistics.
+  void count_integration(const Island& is);
 
   void schedule_pair(std::uint32_t index, double t_next);
 
