@@ -139,6 +139,14 @@ double held_feature_height(const HeldLink& link, const BodyState& mover, const B
 int support_edge_under(const HeldLink& link, const BodyState& support,
                        const std::vector<Vec3>& points);
 
+// At a plan made by a stop: every other sliding component (slip, spin about the normal, rolling)
+// of `contacts` that decelerates so fast that, under the modes it has, it would stop within
+// `resolution` seconds (the scheduler's progress floor) is marked stopped too (slip_stopped,
+// spin_stopped, roll_stopped), so that its modes are chosen from rest together with the one
+// that stopped. Components at rest, accelerating, or further from their stop are left alone.
+void stop_imminent(const std::vector<HeldBody>& bodies, std::vector<HeldContact>& contacts,
+                   double resolution);
+
 // The event that ends an island's present motion.
 struct IslandEvent {
   enum class Kind : std::uint8_t {
