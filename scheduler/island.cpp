@@ -923,7 +923,7 @@ int support_edge_under(const HeldLink& link, const BodyState& support,
 // cycle of three stops every 1.5e-7 s, 3,500 times, each re-planning an island of 29 balls.
 void stop_imminent(const std::vector<HeldBody>& bodies, std::vector<HeldContact>& contacts,
                    double resolution) {
-  const std::vector<HeldContactMotion> now = held_velocities(bodies, contacts);
+  // Its motion holds the velocities (slip_W, dw_W) beside their rates.
   const HeldSolution going = solve_held(bodies, contacts);
   if (going.status != HeldStatus::kOk) return;
   // A component moving at v whose rate along its motion is -a (a > 0) stops by v / a.
@@ -936,13 +936,13 @@ void stop_imminent(const std::vector<HeldBody>& bodies, std::vector<HeldContact>
     HeldContact& c = contacts[i];
     if (!c.active) continue;
     const HeldContactMotion& m = going.motion[i];
-    if (slides(c, 0) && soon(plane_coords(c, now[i].slip_W), plane_coords(c, m.slip_rate_W))) {
+    if (slides(c, 0) && soon(plane_coords(c, m.slip_W), plane_coords(c, m.slip_rate_W))) {
       c.slip_stopped = true;
     }
-    if (slides(c, 1) && soon(Vec2(now[i].dw_W.dot(c.n_W), 0.0), Vec2(m.dalpha_W.dot(c.n_W), 0.0))) {
+    if (slides(c, 1) && soon(Vec2(m.dw_W.dot(c.n_W), 0.0), Vec2(m.dalpha_W.dot(c.n_W), 0.0))) {
       c.spin_stopped = true;
     }
-    if (slides(c, 2) && soon(plane_coords(c, now[i].dw_W), plane_coords(c, m.dalpha_W))) {
+    if (slides(c, 2) && soon(plane_coords(c, m.dw_W), plane_coords(c, m.dalpha_W))) {
       c.roll_stopped = true;
     }
   }

@@ -53,7 +53,11 @@ CollisionRecord Simulation::Impl::collide_or_hold(std::uint32_t index, Contact& 
   // 0.1 m/s was held, let go at once by its plan, and left receding from a gap of 2e-13 m at
   // 1e-8 m/s: its pair was then checked every 1e-12 s, 1.7 million times, while rotation
   // slowly drew the hulls apart.)
-  const double v_hold = in_free_flight(a) && in_free_flight(b) ? 0.0 : hand_over_speed(c);
+  const bool held_pair = !(in_free_flight(a) && in_free_flight(b));
+  const double v_hold = held_pair ? hand_over_speed(c) : 0.0;
+  // The least speed a held pair is resolved at (below): the hand-over speed, at least the
+  // settling speed - a fall from the plane's resolution, the least the model resolves.
+  const double v_least = std::max(v_hold, held_pair ? settle_speed(p) : 0.0);
   const bool gentle =
       -initial_normal_velocity(c) <= v_hold * (1.0 + settings().microcollision_speed_slack);
   ResolveOptions options;
@@ -71,10 +75,7 @@ CollisionRecord Simulation::Impl::collide_or_hold(std::uint32_t index, Contact& 
   // by its island only by rounding (hand-over speed ~1e-25 m/s) was struck 101 times at one
   // instant, six times in 0.4 s (100 hulls, seed 6; the drift-free impulse then lies on the
   // friction cone's boundary, and reached that rebound and no more).
-  const bool held_pair = !(in_free_flight(a) && in_free_flight(b));
-  if (!link) {
-    c.v_micro = std::max({c.v_micro, v_hold, held_pair ? settle_speed(p) : 0.0});
-  }
+  if (!link) c.v_micro = std::max(c.v_micro, v_least);
   if ((gentle || round >= 2) && link) options.restitution = 0.0;
   CollisionRecord record = collide(p, c, t, options);
   if (!zeno.empty() && link) {
@@ -104,8 +105,7 @@ CollisionRecord Simulation::Impl::collide_or_hold(std::uint32_t index, Contact& 
   // its sliding neighbours rebounded at 4e-8 m/s, was stopped by the floor's friction 5e-9 s
   // later and carried into the wall again, a collision every 5e-9 s (100 hulls, seed 8, from
   // 0.3863 s; the run stalled there).
-  if (link && u_after.dot(record.n_W) <
-                  std::max({v_hold, rounding_speed(c), held_pair ? settle_speed(p) : 0.0})) {
+  if (link && u_after.dot(record.n_W) < std::max(v_least, rounding_speed(c))) {
     hold(index, *link, dr, t, /*struck=*/!gentle);
   } else {
     after_collision(record, t);

@@ -17,35 +17,42 @@ source_dir=$3
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 fail=0
+# run_pile NAME "PILE.PY ARGUMENTS" [palpable run options]: writes the pile to $work/NAME.json and
+# runs it; where either fails, says why, sets fail and returns 1.
+run_pile() {
+  local name=$1 spec=$2
+  shift 2
+  # shellcheck disable=SC2086
+  "$python" "$source_dir/tools/stacks/pile.py" $spec >"$work/$name.json" || {
+    echo "FAIL pile.py $spec"
+    fail=1
+    return 1
+  }
+  "$palpable" run "$work/$name.json" "$@" >/dev/null 2>"$work/err" && return 0
+  echo "FAIL pile $spec (exit $?): $(tail -c 400 "$work/err")"
+  fail=1
+  return 1
+}
+# summary_value FILE EXPRESSION: the value of a Python expression of the summary JSON `s`.
+summary_value() {
+  "$python" -c 'import json, sys; s = json.load(open(sys.argv[1])); print(eval(sys.argv[2]))' "$1" "$2"
+}
 for spec in "100 sphere 0.26 --seed 2" "50 sphere 0.3 --seed 7" "30 hull 0.3 --seed 3" \
   "100 hull 0.3 --seed 1" "200 hull 1e-6 --seed 1"; do
-  scene="$work/pile.json"
-  # shellcheck disable=SC2086
-  "$python" "$source_dir/tools/stacks/pile.py" $spec >"$scene" || { echo "FAIL pile.py $spec"; fail=1; continue; }
-  if "$palpable" run "$scene" >/dev/null 2>"$work/err"; then
-    echo "ok   pile $spec"
-  else
-    echo "FAIL pile $spec (exit $?): $(tail -c 400 "$work/err")"
-    fail=1
-  fi
+  run_pile pile "$spec" && echo "ok   pile $spec"
 done
 # A hull let go by a hull held on the floor, left touching it and parting at 2e-5 m/s (50 hulls,
 # seed 4, at 0.1673 s): hopping 5e-11 m, its pair was checked 750,000 times in 10 us, at
 # intervals that the gap set, until it came back (865,237 pair checks by 0.2 s). Such a pair is
 # now parted at the hand-over speed, a microcollision (about 50,000 checks by 0.2 s).
-scene="$work/hop.json"
-"$python" "$source_dir/tools/stacks/pile.py" 50 hull 0.2 --seed 4 >"$scene" || { echo "FAIL pile.py hop"; fail=1; }
-if "$palpable" run "$scene" --summary-json "$work/hop.summary.json" >/dev/null 2>"$work/err"; then
-  checks=$("$python" -c 'import json, sys; print(json.load(open(sys.argv[1]))["pair_checks"])' "$work/hop.summary.json")
+if run_pile hop "50 hull 0.2 --seed 4" --summary-json "$work/hop.summary.json"; then
+  checks=$(summary_value "$work/hop.summary.json" 's["pair_checks"]')
   if [ "$checks" -lt 200000 ]; then
     echo "ok   50 hulls, seed 4, to 0.2 s: $checks pair checks"
   else
     echo "FAIL 50 hulls, seed 4, to 0.2 s: $checks pair checks (a hop checked at the gap's pace?)"
     fail=1
   fi
-else
-  echo "FAIL pile 50 hull 0.2 --seed 4 (exit $?): $(tail -c 400 "$work/err")"
-  fail=1
 fi
 # A hull held on the floor, pushed against a vertical wall by its island (100 hulls, seed 3, at
 # 0.2441 s): its holds let go at once, and the microcollision that replaced them rebounded at the
@@ -54,19 +61,14 @@ fi
 # hand-over speed was above zero by rounding (1e-25 m/s): six retry-limit hits in 0.4 s, until
 # that rebound too was floored at the settling speed. None may be hit.
 for seed in 3 6; do
-  scene="$work/wall$seed.json"
-  "$python" "$source_dir/tools/stacks/pile.py" 100 hull 0.4 --seed "$seed" >"$scene" || { echo "FAIL pile.py wall $seed"; fail=1; continue; }
-  if "$palpable" run "$scene" --summary-json "$work/wall.summary.json" >/dev/null 2>"$work/err"; then
-    hits=$("$python" -c "import json,sys; print(json.load(open(sys.argv[1]))['statistics']['retry_limit_hits'])" "$work/wall.summary.json")
+  if run_pile "wall$seed" "100 hull 0.4 --seed $seed" --summary-json "$work/wall.summary.json"; then
+    hits=$(summary_value "$work/wall.summary.json" 's["statistics"]["retry_limit_hits"]')
     if [ "$hits" = "0" ]; then
       echo "ok   100 hulls, seed $seed, to 0.4 s: no retry-limit hit"
     else
       echo "FAIL 100 hulls, seed $seed, to 0.4 s: $hits retry-limit hits"
       fail=1
     fi
-  else
-    echo "FAIL pile 100 hull 0.4 --seed $seed (exit $?): $(tail -c 400 "$work/err")"
-    fail=1
   fi
 done
 # A hull held on the floor, pushed against a vertical wall by its sliding neighbours (100 hulls,
@@ -75,9 +77,7 @@ done
 # floor stopped that rebound 5e-9 s later and its island carried it into the wall again - a
 # train of collisions 5e-9 s apart (708 in 3.4e-6 s), the run stalled before 0.388 s. A rebound
 # below the settling speed is now held. No pair may collide 100 times within 1e-5 s.
-scene="$work/train.json"
-"$python" "$source_dir/tools/stacks/pile.py" 100 hull 0.3864 --seed 8 >"$scene" || { echo "FAIL pile.py train"; fail=1; }
-if "$palpable" run "$scene" --events "$work/train.csv" >/dev/null 2>"$work/err"; then
+if run_pile train "100 hull 0.3864 --seed 8" --events "$work/train.csv"; then
   most=$("$python" - "$work/train.csv" <<'PY'
 import collections, csv, sys
 times = collections.defaultdict(list)
@@ -101,9 +101,6 @@ PY
     echo "FAIL 100 hulls, seed 8, to 0.3864 s: $most collisions of a pair within 1e-5 s"
     fail=1
   fi
-else
-  echo "FAIL pile 100 hull 0.3864 --seed 8 (exit $?): $(tail -c 400 "$work/err")"
-  fail=1
 fi
 # Rest, judged from the trace alone (tools/stacks/judge.py): 50 hulls over 10 s. Seed 5 kept a
 # lone hull rocking on the floor for ever (each fourth quiet landing kicked it back up at v_micro)
@@ -111,24 +108,18 @@ fi
 # in a microcollision train on the floor (its quick releases never forgotten); seed 4 (the hop
 # above) came to rest at 0.70 s after 7.1 s of CPU, now 0.85 s after 5.7 s. About 15 s of CPU.
 for seed in 4 5 8; do
-  scene="$work/rest$seed.json"
-  "$python" "$source_dir/tools/stacks/pile.py" 50 hull 10 --seed "$seed" >"$scene" || { echo "FAIL pile.py seed $seed"; fail=1; continue; }
-  if "$palpable" run "$scene" --trace "$work/rest$seed.csv" >/dev/null 2>"$work/err"; then
-    verdict=$("$python" "$source_dir/tools/stacks/judge.py" "$work/rest$seed.csv" | tail -1)
-    case "$verdict" in
-      *"AT REST"*) echo "ok   50 hulls, seed $seed, at rest by 10 s: $verdict" ;;
-      *) echo "FAIL 50 hulls, seed $seed, not at rest by 10 s: $verdict"; fail=1 ;;
-    esac
-    # Seed 8 had two hulls 0.8 mm into each other from 0.275 s (a link integrated without its
-    # contact, see scheduler/island.cpp support_edge_under): the run's warning counted 9.7 million
-    # overlapping queries, and took 167 s of CPU. A few are the integration's drift at a release.
-    overlaps=$(sed -n 's/.*: \([0-9]*\) closest-feature queries found bodies overlapping.*/\1/p' "$work/err")
-    if [ "${overlaps:-0}" -gt 1000 ]; then
-      echo "FAIL 50 hulls, seed $seed: ${overlaps} closest-feature queries found bodies overlapping"
-      fail=1
-    fi
-  else
-    echo "FAIL pile 50 hull 10 --seed $seed (exit $?): $(tail -c 400 "$work/err")"
+  run_pile "rest$seed" "50 hull 10 --seed $seed" --trace "$work/rest$seed.csv" || continue
+  verdict=$("$python" "$source_dir/tools/stacks/judge.py" "$work/rest$seed.csv" | tail -1)
+  case "$verdict" in
+    *"AT REST"*) echo "ok   50 hulls, seed $seed, at rest by 10 s: $verdict" ;;
+    *) echo "FAIL 50 hulls, seed $seed, not at rest by 10 s: $verdict"; fail=1 ;;
+  esac
+  # Seed 8 had two hulls 0.8 mm into each other from 0.275 s (a link integrated without its
+  # contact, see scheduler/island.cpp support_edge_under): the run's warning counted 9.7 million
+  # overlapping queries, and took 167 s of CPU. A few are the integration's drift at a release.
+  overlaps=$(sed -n 's/.*: \([0-9]*\) closest-feature queries found bodies overlapping.*/\1/p' "$work/err")
+  if [ "${overlaps:-0}" -gt 1000 ]; then
+    echo "FAIL 50 hulls, seed $seed: ${overlaps} closest-feature queries found bodies overlapping"
     fail=1
   fi
 done
