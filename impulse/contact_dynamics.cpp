@@ -559,55 +559,6 @@ class Assembly {
     return B;
   }
 
-  // The point of {y : C y >= d} nearest the origin: for one column an interval; otherwise the
-  // LCP of its dual (y = C^T mu, mu >= 0 complementary to C C^T mu - d >= 0, positive
-  // semi-definite: Lemke) over the inequalities y breaks, those the answer still breaks added
-  // until none is (the nearest point of a larger set that lies in the smaller one is its nearest
-  // point too). nullopt where an LCP has no solution or 50 rounds do not settle it.
-  static std::optional<VecX> nearest_point(const MatX& C, const VecX& d) {
-    if (C.cols() == 1) {
-      // One free direction (a ball in a corner): the interval of y meeting every inequality,
-      // and its point nearest zero.
-      double lo = -INFINITY, hi = INFINITY;
-      for (Eigen::Index i = 0; i < C.rows(); ++i) {
-        if (C(i, 0) > 0.0) {
-          lo = std::max(lo, d(i) / C(i, 0));
-        } else if (C(i, 0) < 0.0) {
-          hi = std::min(hi, d(i) / C(i, 0));
-        } else if (d(i) > 0.0) {
-          return std::nullopt;
-        }
-      }
-      if (!(lo <= hi)) return std::nullopt;
-      return VecX::Constant(1, std::clamp(0.0, lo, hi));
-    }
-    const double tolerance = 1e-12 * (d.cwiseAbs().maxCoeff() + 1e-300);
-    std::vector<Eigen::Index> subset;
-    VecX y = VecX::Zero(C.cols());
-    for (int round = 0; round < 50; ++round) {
-      const VecX slack = C * y - d;
-      bool added = false;
-      for (Eigen::Index i = 0; i < slack.size(); ++i) {
-        if (slack(i) < -tolerance && std::find(subset.begin(), subset.end(), i) == subset.end()) {
-          subset.push_back(i);
-          added = true;
-        }
-      }
-      if (!added) return y;
-      const Eigen::Index n = static_cast<Eigen::Index>(subset.size());
-      MatX Cs(n, C.cols());
-      VecX ds(n);
-      for (Eigen::Index i = 0; i < n; ++i) {
-        Cs.row(i) = C.row(subset[static_cast<std::size_t>(i)]);
-        ds(i) = d(subset[static_cast<std::size_t>(i)]);
-      }
-      const LcpSolution lcp = solve_lcp(Cs * Cs.transpose(), -ds);
-      if (!lcp.solved) return std::nullopt;
-      y = Cs.transpose() * lcp.z;
-    }
-    return std::nullopt;
-  }
-
   // Where the rows are dependent (A singular) and a multiplier combination leaves every row's
   // value alone but not the bodies' accelerations, the accelerations are not unique: a ball
   // wedged between a floor and a wall, both sticking, may be squeezed between them by any

