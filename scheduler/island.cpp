@@ -1703,6 +1703,12 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
   };
   // The event functions at a state.
   std::vector<double> landing_threshold;  // per link [m] (see below)
+  // A support's vertex watched against one of the mover's faces (see below).
+  struct SupportWatch {
+    int vertex, face;
+    double threshold;
+  };
+  std::vector<std::vector<SupportWatch>> support_watch;  // per link
   // A fixed block of event functions per link (their kinds follow the link's modes, which do not
   // change within a motion), so that the values at two states line up entry by entry.
   auto events = [&](double t, const dopri5::State& y) {
@@ -1855,16 +1861,62 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
       // that halves its height within a step lands, whatever it did before (a body rocking on
       // an edge with the rest of its face just above the plane must not sink into it).
       if (landing_threshold.size() <= i) landing_threshold.resize(i + 1, -kInfinity);
-      if (landing_threshold[i] == -kInfinity) {
-        // A vertex on the plane already (to its resolution, kPlaneResolution of the body's size:
-        // a face held at a gap of zero, its body tipped onto one of its edges) lands as soon as
-        // it goes down at all.
-        const double feature_level = std::max(feature_lowest, 0.5 * settings.envelope_m);
-        landing_threshold[i] = lowest <= kPlaneResolution * size
-                                   ? lowest - 1e-12 * size
-                                   : 0.5 * std::max(0.0, std::min(feature_level, lowest));
-      }
+      const double feature_level = std::max(feature_lowest, 0.5 * settings.envelope_m);
+      // A vertex on the plane already (to its resolution, kPlaneResolution of the body's size:
+      // a face held at a gap of zero, its body tipped onto one of its edges) lands as soon as
+      // it goes down at all.
+      auto threshold = [&](double height) {
+        return height <= kPlaneResolution * size
+                   ? height - 1e-12 * size
+                   : 0.5 * std::max(0.0, std::min(feature_level, height));
+      };
+      const bool fresh = landing_threshold[i] == -kInfinity;
+      if (fresh) landing_threshold[i] = threshold(lowest);
       e[8].value = lowest - landing_threshold[i];
+      // And the support's vertices landing on the mover: a held link keeps the mover's feature
+      // at its height above the plane, and the plane is the query's normal, tilted from the faces
+      // where they are not parallel; the feature sliding over it, a face of the mover tilted from
+      // the plane comes down onto the support's vertices at the tilt times the slip. (In a pile
+      // of 50 hulls, seed 3, a hull's edge held on another's face, 5e-3 and 8e-3 rad off their
+      // faces, slid 16 um into a vertex of that face, and the pair was found overlapping 594
+      // times.) Watched: each vertex of the support whose nearest face of the mover (its largest
+      // face value, a lower bound of its distance) is within the envelope and faces the support
+      // within 0.1 rad but not parallel to the plane (a face held flat keeps its height), from
+      // that face's plane, with the other vertices' thresholds.
+      if (support_watch.size() <= i) support_watch.resize(i + 1);
+      const ShapeGeometry& gs = *geometry[link.support.index];
+      if (gs.pieces().size() != 1 || !gs.pieces()[0].mesh) continue;
+      const ShapeGeometry::Piece& sp = gs.pieces()[0];
+      const Mat3 R_SP = rotation(ss) * sp.R_M;
+      const Vec3 s_origin = ss.x_W + rotation(ss) * sp.p_M;
+      auto in_mover = [&](int v) {
+        return Vec3(R.transpose() * (s_origin + R_SP * sp.mesh->vertex(v) - origin));
+      };
+      std::vector<SupportWatch>& watch = support_watch[i];
+      if (fresh) {
+        watch.clear();
+        const double cos_limit = std::cos(0.1);
+        for (int v = 0; v < sp.mesh->num_vertices(); ++v) {
+          const Vec3 q = in_mover(v);
+          int nearest = -1;
+          double value = -kInfinity;
+          for (int f = 0; f < piece.mesh->num_faces(); ++f) {
+            const double fv = piece.mesh->face_eval(f, q);
+            if (fv > value) {
+              value = fv;
+              nearest = f;
+            }
+          }
+          if (nearest < 0 || !(value <= settings.envelope_m)) continue;
+          const Vec3 n_f = R * piece.mesh->face_normal(nearest);
+          if (!(-n_f.dot(c.n_W) > cos_limit) || !(n_f.cross(c.n_W).norm() > 1e-9)) continue;
+          watch.push_back({v, nearest, threshold(value)});
+        }
+      }
+      for (const SupportWatch& w : watch) {
+        const double value = piece.mesh->face_eval(w.face, in_mover(w.vertex)) - w.threshold;
+        e[8].value = std::min(e[8].value, value);
+      }
     }
     return out;
   };

@@ -37,6 +37,20 @@ run_pile() {
 summary_value() {
   "$python" -c 'import json, sys; s = json.load(open(sys.argv[1])); print(eval(sys.argv[2]))' "$1" "$2"
 }
+# require_none "PILE.PY ARGUMENTS" STATISTIC WHAT: runs the pile; its summary's statistic must be 0
+# (WHAT names it in the report).
+require_none() {
+  local spec=$1 statistic=$2 what=$3
+  run_pile none "$spec" --summary-json "$work/none.summary.json" || return
+  local count
+  count=$(summary_value "$work/none.summary.json" "s[\"statistics\"][\"$statistic\"]")
+  if [ "$count" = "0" ]; then
+    echo "ok   pile $spec: no $what"
+  else
+    echo "FAIL pile $spec: $count $what"
+    fail=1
+  fi
+}
 for spec in "100 sphere 0.26 --seed 2" "50 sphere 0.3 --seed 7" "30 hull 0.3 --seed 3" \
   "100 hull 0.3 --seed 1" "200 hull 1e-6 --seed 1"; do
   run_pile pile "$spec" && echo "ok   pile $spec"
@@ -61,15 +75,7 @@ fi
 # hand-over speed was above zero by rounding (1e-25 m/s): six retry-limit hits in 0.4 s, until
 # that rebound too was floored at the settling speed. None may be hit.
 for seed in 3 6; do
-  if run_pile "wall$seed" "100 hull 0.4 --seed $seed" --summary-json "$work/wall.summary.json"; then
-    hits=$(summary_value "$work/wall.summary.json" 's["statistics"]["retry_limit_hits"]')
-    if [ "$hits" = "0" ]; then
-      echo "ok   100 hulls, seed $seed, to 0.4 s: no retry-limit hit"
-    else
-      echo "FAIL 100 hulls, seed $seed, to 0.4 s: $hits retry-limit hits"
-      fail=1
-    fi
-  fi
+  require_none "100 hull 0.4 --seed $seed" retry_limit_hits "retry-limit hits"
 done
 # A hull held on the floor, pushed against a vertical wall by its sliding neighbours (100 hulls,
 # seed 8, from 0.3863 s): each collision with the wall rebounded it at 4e-8 m/s, above the rounding
@@ -102,6 +108,12 @@ PY
     fail=1
   fi
 fi
+# A hull's edge held on another hull's face (50 hulls, seed 3, from 0.2644 s), its plane the query's
+# normal, 5e-3 and 8e-3 rad off the two faces: sliding over that plane, the mover's face came down
+# onto a vertex of the support's face, unwatched, 16 um deep by 0.2846 s, and the pair was found
+# overlapping 594 times. The support's vertices are now watched against the mover's faces that
+# are tilted from the plane. None may overlap (0.5 s of CPU).
+require_none "50 hull 0.3 --seed 3" penetrations "queries finding bodies overlapping"
 # Rest, judged from the trace alone (tools/stacks/judge.py): 50 hulls over 10 s. Seed 5 kept a
 # lone hull rocking on the floor for ever (each fourth quiet landing kicked it back up at v_micro)
 # and a cluster pumped by microcollisions between hulls leaning edge on edge; seed 8 left a hull
