@@ -225,7 +225,9 @@ double Simulation::Impl::next_check_time(const PairSet::Pair& p, const BodyState
           ? held_time_of_impact(p, s1, s2, dr, halve_gap)
           : time_of_impact(body(p.a), s1, pairs.geometry(p.a), body(p.b), s2, pairs.geometry(p.b),
                            dr, p.cache, world.gravity_W, settings());
-  if (!persistent() && !bound.exact && (bound.floored || bound.dt < floor) &&
+  // Under the persistent model, only where both bodies fly (see below).
+  const bool ballistic = !persistent() || (in_free_flight(p.a) && in_free_flight(p.b));
+  if (ballistic && !bound.exact && (bound.floored || bound.dt < floor) &&
       dr.status == ContactStatus::kSeparated) {
     // A floored bound (the rotational term) near contact: the certified vertex model
     // (distance/impact_instant.hpp) keeps the pair from closing even half of its gap for
@@ -235,7 +237,11 @@ double Simulation::Impl::next_check_time(const PairSet::Pair& p, const BodyState
     // (Free flight only, as the model: not under the persistent model, whose held bodies fly
     // otherwise, and whose pair resting within the envelope is held where it is: with the step,
     // a box started sliding half an envelope above a floor at mu 1e3 fell a quarter envelope
-    // before its contact was found, and slid 2.2 mm where it stops within 0.15 mm.)
+    // before its contact was found, and slid 2.2 mm where it stops within 0.15 mm.) Two dynamic
+    // bodies that both fly are the model's case under either: nothing holds or presses them
+    // together. (Left to the floor, two hulls of a pile of 50 (seed 3) falling side by side,
+    // 1.9e-6 m apart and parting at 7e-7 m/s while turning, were checked every 1e-6 s, 9,400
+    // times; a pile of 200 hulls counted a million floored bounds in 0.5 s.)
     const double certified =
         certified_step(body(p.a), s1, pairs.geometry(p.a), body(p.b), s2, pairs.geometry(p.b), dr,
                        p.cache, world.gravity_W, settings(), 0.5 * dr.distance);

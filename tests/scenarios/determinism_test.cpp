@@ -59,7 +59,7 @@ const Expected kExpected[] = {
     {"balls_in_dish.json", 0xb0599439c6344c91ull},
     {"block_on_ramp_accelerating.json", 0x7baccee39ea4ad1eull},
     {"block_on_ramp_decelerating.json", 0x8369ce1c7eaca70aull},
-    {"bowling.json", 0x97e5cf335e3c0007ull},
+    {"bowling.json", 0x8b25b7ad73e0bad2ull},
     {"chain_of_balls.json", 0x42e3fa46cddd6d8dull},
     {"coins.json", 0x809911329260d595ull},
     {"cylinder_rolling_slope.json", 0x4bc4bf6ecb23e51aull},
