@@ -837,6 +837,54 @@ double inside_edge(const std::vector<Vec2>& polygon, std::size_t k, const Vec2& 
   return cross2(d, cop - a) / d.norm();
 }
 
+// A support's vertex watched against one of a held mover's faces (Island::integrate's landing
+// event): their indices in the two pieces' meshes, and the threshold its face value must stay
+// above.
+struct SupportWatch {
+  int vertex, face;
+  double threshold;
+};
+
+// A polyhedral support piece's vertex `v` in a polyhedral mover piece's frame, the mover piece
+// turned by R_mover and placed at origin_mover, the support piece by R_support at origin_support.
+Vec3 vertex_in_mover(const ShapeGeometry::Piece& support, const Mat3& R_support,
+                     const Vec3& origin_support, const Mat3& R_mover, const Vec3& origin_mover,
+                     int v) {
+  return R_mover.transpose() *
+         (origin_support + R_support * support.mesh->vertex(v) - origin_mover);
+}
+
+// The support's vertices a held link watches against the mover's faces (see Island::integrate),
+// each with its face and its present face value: those whose nearest face of the mover (the
+// largest face value, a lower bound of the vertex's distance) lies within the envelope, facing
+// the support (against n_W, the link's normal) within 0.1 rad but not parallel to the plane.
+std::vector<SupportWatch> support_watch_candidates(const ShapeGeometry::Piece& mover,
+                                                   const Mat3& R_mover, const Vec3& origin_mover,
+                                                   const ShapeGeometry::Piece& support,
+                                                   const Mat3& R_support,
+                                                   const Vec3& origin_support, const Vec3& n_W,
+                                                   double envelope) {
+  std::vector<SupportWatch> out;
+  const double cos_limit = std::cos(0.1);
+  for (int v = 0; v < support.mesh->num_vertices(); ++v) {
+    const Vec3 q = vertex_in_mover(support, R_support, origin_support, R_mover, origin_mover, v);
+    int nearest = -1;
+    double value = -kInfinity;
+    for (int f = 0; f < mover.mesh->num_faces(); ++f) {
+      const double fv = mover.mesh->face_eval(f, q);
+      if (fv > value) {
+        value = fv;
+        nearest = f;
+      }
+    }
+    if (nearest < 0 || !(value <= envelope)) continue;
+    const Vec3 n_f = R_mover * mover.mesh->face_normal(nearest);
+    if (!(-n_f.dot(n_W) > cos_limit) || !(n_f.cross(n_W).norm() > 1e-9)) continue;
+    out.push_back({v, nearest, value});  // the value; the caller turns it into a threshold
+  }
+  return out;
+}
+
 }  // namespace
 
 int Island::index_of(BodyId id) const {
@@ -1703,12 +1751,7 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
   };
   // The event functions at a state.
   std::vector<double> landing_threshold;  // per link [m] (see below)
-  // A support's vertex watched against one of the mover's faces (see below).
-  struct SupportWatch {
-    int vertex, face;
-    double threshold;
-  };
-  std::vector<std::vector<SupportWatch>> support_watch;  // per link
+  std::vector<std::vector<SupportWatch>> support_watch;  // per link (see below)
   // A fixed block of event functions per link (their kinds follow the link's modes, which do not
   // change within a motion), so that the values at two states line up entry by entry.
   auto events = [&](double t, const dopri5::State& y) {
@@ -1889,33 +1932,15 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
       const ShapeGeometry::Piece& sp = gs.pieces()[0];
       const Mat3 R_SP = rotation(ss) * sp.R_M;
       const Vec3 s_origin = ss.x_W + rotation(ss) * sp.p_M;
-      auto in_mover = [&](int v) {
-        return Vec3(R.transpose() * (s_origin + R_SP * sp.mesh->vertex(v) - origin));
-      };
       std::vector<SupportWatch>& watch = support_watch[i];
       if (fresh) {
-        watch.clear();
-        const double cos_limit = std::cos(0.1);
-        for (int v = 0; v < sp.mesh->num_vertices(); ++v) {
-          const Vec3 q = in_mover(v);
-          int nearest = -1;
-          double value = -kInfinity;
-          for (int f = 0; f < piece.mesh->num_faces(); ++f) {
-            const double fv = piece.mesh->face_eval(f, q);
-            if (fv > value) {
-              value = fv;
-              nearest = f;
-            }
-          }
-          if (nearest < 0 || !(value <= settings.envelope_m)) continue;
-          const Vec3 n_f = R * piece.mesh->face_normal(nearest);
-          if (!(-n_f.dot(c.n_W) > cos_limit) || !(n_f.cross(c.n_W).norm() > 1e-9)) continue;
-          watch.push_back({v, nearest, threshold(value)});
-        }
+        watch = support_watch_candidates(piece, R, origin, sp, R_SP, s_origin, c.n_W,
+                                         settings.envelope_m);
+        for (SupportWatch& w : watch) w.threshold = threshold(w.threshold);
       }
       for (const SupportWatch& w : watch) {
-        const double value = piece.mesh->face_eval(w.face, in_mover(w.vertex)) - w.threshold;
-        e[8].value = std::min(e[8].value, value);
+        const Vec3 q = vertex_in_mover(sp, R_SP, s_origin, R, origin, w.vertex);
+        e[8].value = std::min(e[8].value, piece.mesh->face_eval(w.face, q) - w.threshold);
       }
     }
     return out;
