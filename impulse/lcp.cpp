@@ -97,14 +97,11 @@ std::optional<Eigen::VectorXd> active_set_point(const Eigen::MatrixXd& C, const 
                                                 const std::vector<Eigen::Index>& active,
                                                 double tolerance) {
   const Eigen::Index n = static_cast<Eigen::Index>(active.size());
-  Eigen::MatrixXd Ca(n, C.cols());
-  Eigen::VectorXd da(n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const Eigen::Index row = active[static_cast<std::size_t>(i)];
+  for (const Eigen::Index row : active) {
     if (row >= C.rows()) return std::nullopt;
-    Ca.row(i) = C.row(row);
-    da(i) = d(row);
   }
+  const Eigen::MatrixXd Ca = C(active, Eigen::placeholders::all);
+  const Eigen::VectorXd da = d(active);
   Eigen::VectorXd y = Eigen::VectorXd::Zero(C.cols());
   if (n > 0) {
     if (n > C.cols()) return std::nullopt;
@@ -176,13 +173,8 @@ std::optional<Eigen::VectorXd> nearest_point(const Eigen::MatrixXd& C, const Eig
       if (recent.size() > kRecent) recent.pop_back();
       return y;
     }
-    const Eigen::Index n = static_cast<Eigen::Index>(subset.size());
-    Eigen::MatrixXd Cs(n, C.cols());
-    Eigen::VectorXd ds(n);
-    for (Eigen::Index i = 0; i < n; ++i) {
-      Cs.row(i) = C.row(subset[static_cast<std::size_t>(i)]);
-      ds(i) = d(subset[static_cast<std::size_t>(i)]);
-    }
+    const Eigen::MatrixXd Cs = C(subset, Eigen::placeholders::all);
+    const Eigen::VectorXd ds = d(subset);
     const LcpSolution lcp = solve_lcp(Cs * Cs.transpose(), -ds);
     if (!lcp.solved) return std::nullopt;
     y = Cs.transpose() * lcp.z;

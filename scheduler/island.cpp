@@ -1867,7 +1867,8 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
       // held feature's height (a vertex lower than the feature but rising, the other end of an
       // edge the body tips up from, has not landed; one at the feature's height must go down).
       const BodyState ss = body_state_at(*this, world, states, link.support, t);
-      const Vec3 plane = ss.x_W + rotation(ss) * link.point_S;
+      const Mat3 R_S = rotation(ss);
+      const Vec3 plane = ss.x_W + R_S * link.point_S;
       if (link.curved_shape) {
         const Vec3 d = (rotation(sm) * link.piece_R_M).transpose() * -c.n_W;
         const double rise = curved_rise(*link.curved_shape, d, link.curved_end);
@@ -1930,8 +1931,8 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
       const ShapeGeometry& gs = *geometry[link.support.index];
       if (gs.pieces().size() != 1 || !gs.pieces()[0].mesh) continue;
       const ShapeGeometry::Piece& sp = gs.pieces()[0];
-      const Mat3 R_SP = rotation(ss) * sp.R_M;
-      const Vec3 s_origin = ss.x_W + rotation(ss) * sp.p_M;
+      const Mat3 R_SP = R_S * sp.R_M;
+      const Vec3 s_origin = ss.x_W + R_S * sp.p_M;
       std::vector<SupportWatch>& watch = support_watch[i];
       if (fresh) {
         watch = support_watch_candidates(piece, R, origin, sp, R_SP, s_origin, c.n_W,

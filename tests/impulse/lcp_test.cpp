@@ -14,15 +14,21 @@ namespace {
 using MatX = Eigen::MatrixXd;
 using VecX = Eigen::VectorXd;
 
+// The indices i < n whose bit is set in mask: one subset of a brute-force enumeration.
+std::vector<Eigen::Index> members(unsigned mask, Eigen::Index n) {
+  std::vector<Eigen::Index> in;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (mask & (1u << i)) in.push_back(i);
+  }
+  return in;
+}
+
 // Every solution's z found by enumerating which variables may be positive.
 std::vector<VecX> enumerate(const MatX& M, const VecX& q) {
   const Eigen::Index n = q.size();
   std::vector<VecX> found;
   for (unsigned mask = 0; mask < (1u << n); ++mask) {
-    std::vector<Eigen::Index> in;
-    for (Eigen::Index i = 0; i < n; ++i) {
-      if (mask & (1u << i)) in.push_back(i);
-    }
+    const std::vector<Eigen::Index> in = members(mask, n);
     VecX z = VecX::Zero(n);
     if (!in.empty()) {
       const Eigen::Index k = static_cast<Eigen::Index>(in.size());
@@ -146,20 +152,12 @@ std::optional<VecX> nearest_by_enumeration(const MatX& C, const VecX& d) {
   const double tolerance = 1e-9 * (d.cwiseAbs().maxCoeff() + 1.0);
   std::optional<VecX> best;
   for (unsigned mask = 0; mask < (1u << m); ++mask) {
-    std::vector<Eigen::Index> in;
-    for (Eigen::Index i = 0; i < m; ++i) {
-      if (mask & (1u << i)) in.push_back(i);
-    }
+    const std::vector<Eigen::Index> in = members(mask, m);
     if (static_cast<Eigen::Index>(in.size()) > k) continue;
     VecX y = VecX::Zero(k);
     if (!in.empty()) {
-      const Eigen::Index n = static_cast<Eigen::Index>(in.size());
-      MatX Cs(n, k);
-      VecX ds(n);
-      for (Eigen::Index r = 0; r < n; ++r) {
-        Cs.row(r) = C.row(in[static_cast<std::size_t>(r)]);
-        ds(r) = d(in[static_cast<std::size_t>(r)]);
-      }
+      const MatX Cs = C(in, Eigen::placeholders::all);
+      const VecX ds = d(in);
       Eigen::FullPivLU<MatX> lu(Cs * Cs.transpose());
       if (!lu.isInvertible()) continue;
       y = Cs.transpose() * lu.solve(ds);
