@@ -17,17 +17,12 @@ source_dir=$3
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 fail=0
+# shellcheck source=oracle_runs.sh
+source "$(dirname "$0")/oracle_runs.sh"
 check() {  # scene, name, end, oracle options, then palpable --set values
   local scene=$source_dir/scenarios/$1 name=$2 end=$3 oracle="$4 --scene $source_dir/scenarios/$1"
   shift 4
-  local sets=(--set /settings/integration_tolerance=1e-11 --set "/end_time=$end")
-  for s in "$@"; do sets+=(--set "$s"); done
-  if ! "$palpable" run "$scene" "${sets[@]}" \
-      --trace "$work/$name.csv" --events "$work/$name.events.csv" >/dev/null 2>"$work/err"; then
-    echo "FAIL $name: palpable exit $?: $(tail -c 400 "$work/err")"
-    fail=1
-    return
-  fi
+  run_traced "$name" "$scene" "$end" "$@" || return
   # shellcheck disable=SC2086
   if "$python" "$source_dir/tools/rattleback-oracle" "$work/$name.csv" --end "$end" $oracle \
       --check 1e-5; then
