@@ -1,16 +1,22 @@
 // A held link's geometry (scheduler/island.hpp) on hand-made links, without a simulation: which
 // edge of the support's face a reduced patch lies on (support_edge_under), where the link's plane
-// is tilted from that face, as a face-on-face link made from a closest-feature query's normal is.
+// is tilted from that face, as a face-on-face link made from a closest-feature query's normal is;
+// which pairs of edges a held link watches, and their separation (edge_watch_candidates,
+// edge_separation), against closed forms and a brute-force separating-axis test.
 #include "scheduler/island.hpp"
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <memory>
 #include <vector>
 
 using namespace palpable;
 
 namespace {
+
+constexpr double kPi = 3.14159265358979323846;
 
 // A triangle face of a support, in its frame, and a link whose plane is the face's tilted by
 // `tilt` radians about the x axis (the face's normal is z).
@@ -42,7 +48,155 @@ std::vector<Vec3> over_edge(const HeldLink& link, const BodyState& support, std:
   return points;
 }
 
+// The one piece of a convex polyhedron's geometry, posed in the world.
+struct PosedPiece {
+  ShapeGeometry geometry;
+  Mat3 R;
+  Vec3 origin;
+  PosedPiece(ConvexPolyhedron shape, const Quat& q, const Vec3& x)
+      : geometry(std::make_shared<const Shape>(std::move(shape))),
+        R(q.toRotationMatrix()),
+        origin(x) {}
+  const ShapeGeometry::Piece& piece() const { return geometry.pieces().front(); }
+  const FeatureMesh& mesh() const { return *piece().mesh; }
+  Vec3 vertex(int v) const { return origin + R * mesh().vertex(v); }
+  Vec3 edge(int h) const { return R * (mesh().head(h) - mesh().tail(h)); }
+};
+
+std::vector<EdgeWatch> candidates(const PosedPiece& mover, const PosedPiece& support,
+                                  std::vector<bool> held = {}) {
+  held.resize(static_cast<std::size_t>(mover.mesh().num_vertices()), false);
+  return edge_watch_candidates(mover.piece(), mover.R, mover.origin, held, support.piece(),
+                               support.R, support.origin, 1e-4);
+}
+
+double separation(const PosedPiece& mover, const PosedPiece& support, const EdgeWatch& w) {
+  return edge_separation(support.mesh(), support.R, support.origin, w.support_edge, mover.mesh(),
+                         mover.R, mover.origin, w.mover_edge, w.sign);
+}
+
+// The separating-axis test by brute force: the largest separation of the two pieces along any
+// face normal or cross product of two edges (negative: they overlap, by at least that much).
+double separating_axis(const PosedPiece& a, const PosedPiece& b) {
+  std::vector<Vec3> axes;
+  for (const PosedPiece* p : {&a, &b}) {
+    for (int f = 0; f < p->mesh().num_faces(); ++f) axes.push_back(p->R * p->mesh().face_normal(f));
+  }
+  for (int h = 0; h < a.mesh().num_half_edges(); ++h) {
+    for (int k = 0; k < b.mesh().num_half_edges(); ++k) {
+      const Vec3 n = a.edge(h).cross(b.edge(k));
+      if (n.norm() > 1e-9 * a.edge(h).norm() * b.edge(k).norm()) axes.push_back(n.normalized());
+    }
+  }
+  double best = -kInfinity;
+  for (const Vec3& n : axes) {
+    double a_lo = kInfinity, a_hi = -kInfinity, b_lo = kInfinity, b_hi = -kInfinity;
+    for (int v = 0; v < a.mesh().num_vertices(); ++v) {
+      a_lo = std::min(a_lo, n.dot(a.vertex(v)));
+      a_hi = std::max(a_hi, n.dot(a.vertex(v)));
+    }
+    for (int v = 0; v < b.mesh().num_vertices(); ++v) {
+      b_lo = std::min(b_lo, n.dot(b.vertex(v)));
+      b_hi = std::max(b_hi, n.dot(b.vertex(v)));
+    }
+    best = std::max({best, b_lo - a_hi, a_lo - b_hi});
+  }
+  return best;
+}
+
 }  // namespace
+
+TEST_CASE("island: a held link watches two edges crossing where no vertex enters", "[island]") {
+  // Two cubes (half side 0.05 m) whose edges cross at right angles: the support turned 45 degrees
+  // about x (its top is an edge along x), the mover 45 degrees about y (its bottom an edge along
+  // y), over the support's edge at x0, its bottom edge `gap` above the support's top edge.
+  const double h = 0.05, top = h * std::sqrt(2.0);
+  const PosedPiece support(ConvexPolyhedron::box(Vec3::Constant(h)),
+                           Quat(Eigen::AngleAxisd(kPi / 4, Vec3::UnitX())), Vec3::Zero());
+  auto mover = [&](double x0, double gap, double about_x = 0.0) {
+    return PosedPiece(
+        ConvexPolyhedron::box(Vec3::Constant(h)),
+        Quat(Eigen::AngleAxisd(about_x, Vec3::UnitX()) * Eigen::AngleAxisd(kPi / 4, Vec3::UnitY())),
+        Vec3(x0, 0.0, 2.0 * top + gap));
+  };
+  for (const double gap : {5e-5, 0.0, -3e-5}) {
+    CAPTURE(gap);
+    const PosedPiece m = mover(0.01, gap);
+    const std::vector<EdgeWatch> watch = candidates(m, support);
+    // The two crossing edges, and no other pair: their separation is the gap, negative once the
+    // mover's edge has gone into the support (crossed, no vertex of either inside the other).
+    REQUIRE(watch.size() == 1);
+    CHECK(std::abs(support.edge(watch[0].support_edge).normalized().x()) == Approx(1.0));
+    CHECK(std::abs(m.edge(watch[0].mover_edge).normalized().y()) == Approx(1.0));
+    CHECK(std::abs(separation(m, support, watch[0]) - gap) <= 1e-15);
+    CHECK(std::abs(separating_axis(support, m) - gap) <= 1e-15);
+    // Followed as the mover moves down 8e-5 m and sideways along both edges.
+    const PosedPiece lower = mover(0.02, gap - 8e-5);
+    CHECK(std::abs(separation(lower, support, watch[0]) - (gap - 8e-5)) <= 1e-15);
+    // The mover's edge held (both its ends in the held feature): the tip event's, not watched.
+    std::vector<bool> held(8, false);
+    held[m.mesh().tail_vertex(watch[0].mover_edge)] = true;
+    held[m.mesh().head_vertex(watch[0].mover_edge)] = true;
+    CHECK(candidates(m, support, held).empty());
+  }
+  // Farther apart than the envelope (1e-4 m); crossing beyond the end of the support's edge
+  // (x0 = 0.06 > 0.05: the mover's edge passes its end vertex, which the vertex watches see);
+  // edges parallel (the mover turned 45 degrees about x too, edge on edge along x): none.
+  CHECK(candidates(mover(0.01, 2e-4), support).empty());
+  CHECK(candidates(mover(0.06, 5e-5), support).empty());
+  CHECK(candidates(mover(0.01, 5e-5, kPi / 2), support).empty());
+}
+
+TEST_CASE("island: the edge watch sees the crossing of two hulls in a pile", "[island]") {
+  // tools/stacks/pile.py 200 hull 0.5 --seed 1, at 0.4464308 s (1de97ee): p56 held on a face of
+  // p47 (at rest on the floor) by an edge, a vertex of p56 hanging beyond p47's rim. Two edges of
+  // p56 had crossed two of p47's near that vertex, 60.6 um deep along an edge-edge axis, no vertex
+  // of either inside the other; the pair was then found overlapping 54,162 times. The states
+  // below are the two bodies' at that instant (centre of mass and orientation, printed at full
+  // precision), the vertices those of the scene. Among the pairs of edges watched there, the
+  // deepest is the brute-force separating-axis test's overlap.
+  const std::vector<Vec3> p47 = {
+      {0.017958640800025405, -0.024047588933351155, -0.01598866548073745},
+      {-0.008626640131401919, -0.009346578172408731, 0.016709815642782802},
+      {-0.012380021859193603, -0.009689322504354737, -0.0006207926511913528},
+      {0.022540362183743883, -0.010274252235011978, 0.006685218695842973},
+      {-0.022570030720604334, -0.0034279944633615334, 0.021360654239718037},
+      {-0.014129754797252442, -0.007176919367855101, 0.007707237720116514},
+      {0.003277072494533316, 0.0038015772705169634, 0.005427635556423983},
+      {0.008769326721271058, -0.00886680403991924, -0.0074141911809886725},
+      {-0.0051496906739248345, 0.001116851622039082, 0.0033500834168440283},
+      {0.01869826957295377, -0.005208192772305269, -0.0025376159138793992},
+      {0.016632722124881538, 0.02355374682614004, -0.012855221689583819},
+      {0.011521509155525918, -0.012619406327980975, 0.012056015830681222}};
+  const std::vector<Vec3> p56 = {
+      {-0.020624636857363793, 0.0006184739738101137, 0.02055964207829295},
+      {-0.013276422734759553, -0.009631352690022327, 0.005567981325770417},
+      {0.0036737484593010947, 0.0030241095640626166, -0.005398213256889096},
+      {-0.022955285880651818, 0.004761745046444433, -0.011161673847988425},
+      {0.006021198063467716, -0.003105674975034039, -0.011569094319178392},
+      {0.02478944989638391, -0.008918127501572611, 0.023552390541573265},
+      {-0.0011145027571792601, 0.0017007682676372267, -0.011555889430016826},
+      {-0.016309390684530106, 0.010307310684758493, -0.002222816535940815},
+      {0.0042584309689350855, -0.01587030689381922, 0.0004983067413742923},
+      {0.007934306337610143, 0.01298789529764878, 0.00832736741474506},
+      {-0.0043105773669988474, 0.009262326195821173, 0.004843576773418783},
+      {-0.0011297815471843012, 0.0065150556045339356, -0.009681917720620487}};
+  const PosedPiece support(
+      ConvexPolyhedron::from_points(p47),
+      Quat(-0.96562771853012674, 0.054172932275807661, 0.21705565741636632, 0.13234517066554471),
+      Vec3(-0.16558422842815185, 0.069119505100050299, 0.008064505375399553));
+  const PosedPiece mover(
+      ConvexPolyhedron::from_points(p56),
+      Quat(-0.66975194110131187, -0.50726537037565311, 0.53547588025029225, 0.085905547427690188),
+      Vec3(-0.17445409943717607, 0.078289356881341685, 0.025077522431611276));
+  const double overlap = separating_axis(support, mover);
+  CHECK(overlap == Approx(-6.06e-5).epsilon(0.01));
+  const std::vector<EdgeWatch> watch = candidates(mover, support);
+  REQUIRE(!watch.empty());
+  double deepest = kInfinity;
+  for (const EdgeWatch& w : watch) deepest = std::min(deepest, separation(mover, support, w));
+  CHECK(std::abs(deepest - overlap) <= 1e-12);
+}
 
 TEST_CASE("island: a reduced patch on the edge of a support's face tilted from the plane is on it",
           "[island]") {
