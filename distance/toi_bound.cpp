@@ -198,6 +198,30 @@ ToiMotion toi_motion(const Body& body, const BodyState& state, const ShapeGeomet
   return m;
 }
 
+double vertex_bound_above_plane(const BodyState& s, const ShapeGeometry& g, const Vec3& n_W,
+                                double offset, double closing, double spin, double d_target) {
+  for (const ShapeGeometry::Piece& piece : g.pieces()) {
+    if (piece.kind != ShapeGeometry::PieceKind::kPolyhedron || !piece.mesh) return -1.0;
+  }
+  const Mat3 R_WM = s.q_WM.toRotationMatrix();
+  double best = kInfinity;
+  for (const ShapeGeometry::Piece& piece : g.pieces()) {
+    for (int k = 0; k < piece.mesh->num_vertices(); ++k) {
+      const Vec3 r = R_WM * (piece.p_M + piece.R_M * piece.mesh->vertex(k));
+      const double h = n_W.dot(s.x_W + r) - offset;
+      if (!(h >= 0.0)) return -1.0;  // overlapping (to rounding, or more): not this bound's case
+      const double b = -n_W.dot(s.v_W + s.w_W.cross(r));
+      const double a = closing + r.norm() * spin;
+      const double delta = h - d_target;
+      const double dt = delta <= 0.0 && b < 0.0 ? solve_return_to_gap(a, b, delta)
+                                                : solve_gap_closing(a, b, delta);
+      best = std::min(best, dt);
+      if (!(best > 0.0)) return 0.0;
+    }
+  }
+  return best;
+}
+
 namespace {
 
 // The single sphere of a geometry centred at its origin, or nullptr.
@@ -231,48 +255,25 @@ bool exact_sphere_plane(const Body& sphere_body, const BodyState& s, double radi
   return true;
 }
 
-// A dynamic polyhedron (or compound of polyhedra) in free flight above a fixed plane: its gap is
-// the least height of its vertices, and each vertex's height obeys
-//   h(t) >= h - b t - A t^2 / 2,   b = -n . (v + ω x r)  (its closing speed now, exact),
-//   A = -n . g + |r| (ω̄^2 + ᾱ)  (ω̄ bounds |ω|, ᾱ = ω̄^2 (I_max - I_min) / I_min bounds |ω'| in
-//   torque-free flight: ω' = -I^-1 (ω x I ω), |ω x I ω| <= |ω|^2 (I_max - I_min)).
-// So a vertex on the axis a body rocks or spins about closes only as fast as it truly does, not
-// at ω̄ ρ: a box rocking on an edge, or spinning flat, is bounded by what its corners do.
-// Returns the least time over the vertices (the same branches as toi_bound), or -1 if the pair is
-// not of this kind.
+// A dynamic polyhedron (or compound of polyhedra) in free flight above a fixed plane
+// (vertex_bound_above_plane in toi_bound.hpp, its closing acceleration gravity's): ᾱ = ω̄^2
+// (I_max - I_min) / I_min bounds |ω'| in torque-free flight: ω' = -I^-1 (ω x I ω),
+// |ω x I ω| <= |ω|^2 (I_max - I_min). So a vertex on the axis a body rocks or spins about closes
+// only as fast as it truly does, not at ω̄ ρ: a box rocking on an edge, or spinning flat, is
+// bounded by what its corners do. -1 if the pair is not of this kind.
 // `w_bar`: the body's angular-speed bound ω̄ (its ToiMotion's, already computed).
-double vertex_bound_above_plane(const Body& body, const BodyState& s, const ShapeGeometry& g,
-                                double w_bar, const Body& plane_body, const BodyState& p,
-                                const ShapeGeometry::Piece& half, const Vec3& gravity_W,
-                                double d_target) {
+double ballistic_vertex_bound(const Body& body, const BodyState& s, const ShapeGeometry& g,
+                              double w_bar, const Body& plane_body, const BodyState& p,
+                              const ShapeGeometry::Piece& half, const Vec3& gravity_W,
+                              double d_target) {
   if (!body.is_dynamic() || plane_body.motion != MotionKind::kFixed) return -1.0;
-  for (const ShapeGeometry::Piece& piece : g.pieces()) {
-    if (piece.kind != ShapeGeometry::PieceKind::kPolyhedron || !piece.mesh) return -1.0;
-  }
   const Vec3 n = p.q_WM * half.normal_M;
-  const double offset = half.offset + n.dot(p.x_W);
   const Vec3& I = body.mass.principal_moments;
   const double alpha_bar = I.minCoeff() > 0.0
                                ? w_bar * w_bar * (I.maxCoeff() - I.minCoeff()) / I.minCoeff()
                                : kInfinity;
-  const double g_close = -n.dot(gravity_W);
-  const Mat3 R_WM = s.q_WM.toRotationMatrix();
-  double best = kInfinity;
-  for (const ShapeGeometry::Piece& piece : g.pieces()) {
-    for (int k = 0; k < piece.mesh->num_vertices(); ++k) {
-      const Vec3 r = R_WM * (piece.p_M + piece.R_M * piece.mesh->vertex(k));
-      const double h = n.dot(s.x_W + r) - offset;
-      if (!(h >= 0.0)) return -1.0;  // overlapping (to rounding, or more): not this bound's case
-      const double b = -n.dot(s.v_W + s.w_W.cross(r));
-      const double a = g_close + r.norm() * (w_bar * w_bar + alpha_bar);
-      const double delta = h - d_target;
-      const double dt = delta <= 0.0 && b < 0.0 ? solve_return_to_gap(a, b, delta)
-                                                : solve_gap_closing(a, b, delta);
-      best = std::min(best, dt);
-      if (!(best > 0.0)) return 0.0;
-    }
-  }
-  return best;
+  return vertex_bound_above_plane(s, g, n, half.offset + n.dot(p.x_W), -n.dot(gravity_W),
+                                  w_bar * w_bar + alpha_bar, d_target);
 }
 
 }  // namespace
@@ -314,11 +315,11 @@ ToiBound single_time_of_impact(const Body& body1, const BodyState& state1,
       closest.status == ContactStatus::kSeparated || closest.status == ContactStatus::kTouching;
   double by_vertices = -1.0;
   if (bound.floored && apart && halfspace(geometry2)) {
-    by_vertices = vertex_bound_above_plane(body1, state1, geometry1, m1.omega_bound, body2, state2,
-                                           *halfspace(geometry2), gravity_W, d_target);
+    by_vertices = ballistic_vertex_bound(body1, state1, geometry1, m1.omega_bound, body2, state2,
+                                         *halfspace(geometry2), gravity_W, d_target);
   } else if (bound.floored && apart && halfspace(geometry1)) {
-    by_vertices = vertex_bound_above_plane(body2, state2, geometry2, m2.omega_bound, body1, state1,
-                                           *halfspace(geometry1), gravity_W, d_target);
+    by_vertices = ballistic_vertex_bound(body2, state2, geometry2, m2.omega_bound, body1, state1,
+                                         *halfspace(geometry1), gravity_W, d_target);
   }
   if (by_vertices > bound.dt) {
     bound.dt = by_vertices;

@@ -1545,6 +1545,7 @@ void Island::classify(const World& world, const std::vector<const ShapeGeometry*
         const BodyState& s = anchor_[0];
         turn_centre_ = s.x_W + turn_axis_.cross(s.v_W) / turn_rate_;
         bounds_[0].a_slack = std::abs(turn_rate_) * s.v_W.norm();
+        bounds_[0].alpha_slack = kInfinity;  // its w turns with the ball: not bounded here
         return;
       }
     }
@@ -2159,7 +2160,8 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
 
   dopri5::Step step;
   dopri5::StepController controller;
-  std::vector<double> w_max(bodies.size(), 0.0), a_max(bodies.size(), 0.0);
+  std::vector<double> w_max(bodies.size(), 0.0), a_max(bodies.size(), 0.0),
+      alpha_max(bodies.size(), 0.0);
   std::vector<Vec3> a_start(bodies.size(), Vec3::Zero()), alpha_start(bodies.size(), Vec3::Zero());
   t_end = cap;
   event = IslandEvent{IslandEvent::Kind::kSegmentEnd, -1};
@@ -2253,6 +2255,7 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
       }
       for (const dopri5::State& kk : step.k) {
         a_max[k] = std::max(a_max[k], (acceleration(kk) - a_start[k]).norm());
+        alpha_max[k] = std::max(alpha_max[k], (rate(kk, o + 10) - alpha_start[k]).norm());
       }
       w_max[k] = std::max(
           {w_max[k], step.y0.segment<3>(o + 10).norm(), step.y1.segment<3>(o + 10).norm()});
@@ -2300,6 +2303,7 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
     bounds_[k].a_W = a_start[k];
     bounds_[k].alpha_W = alpha_start[k];
     bounds_[k].a_slack = 1.25 * a_max[k] + 1e-9;
+    bounds_[k].alpha_slack = 1.25 * alpha_max[k] + 1e-9;
     bounds_[k].w_bound = 1.25 * w_max[k];
   }
 }

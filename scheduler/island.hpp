@@ -258,6 +258,9 @@ class Island {
     Vec3 alpha_W = Vec3::Zero();  // the angular acceleration now [rad/s^2]
     double a_slack = 0.0;
     double w_bound = 0.0;
+    // How far the angular acceleration may depart from alpha_W over the motion [rad/s^2]: 0
+    // where it is constant; an integrated motion's, from its stages as a_slack.
+    double alpha_slack = 0.0;
   };
   MotionBound bound(std::size_t k) const;
   // The body's acceleration now (the nominal of bound()).

@@ -173,7 +173,26 @@ ToiBound Simulation::Impl::held_time_of_impact(const PairSet::Pair& p, const Bod
   auto target = [&](const DistanceResult& r) {
     return halve_gap && r.distance > 0.0 ? std::min(d_target, 0.5 * r.distance) : d_target;
   };
-  if (p.cache.piece_results().empty()) return toi_bound(m1, m2, dr, target(dr), settings());
+  if (p.cache.piece_results().empty()) {
+    ToiBound bound = toi_bound(m1, m2, dr, target(dr), settings());
+    if (bound.floored &&
+        (dr.status == ContactStatus::kSeparated || dr.status == ContactStatus::kTouching)) {
+      // A held body above a fixed plane, a corner a few nanometres over it while the body rocks
+      // or slides on another: the rotational term (its angular-speed bound times its reach) made
+      // the bound the time to close that gap at once, and the pair was checked every 3e-11 s
+      // (the floor-p15 pair of a pile of 200 hulls, seed 1: 319,494 checks in 0.3 s, 92 % of the
+      // pile's floored bounds were such pairs). Its vertices bound it, as a body's in free flight
+      // (time_of_impact), by what each truly does: its speed along the normal now, and a bound on
+      // its acceleration from the island's (the centre of mass's, and w^2 + |w'| times its
+      // distance from the centre of mass). Both bounds are lower bounds on the same instant.
+      const double by_vertices = held_vertex_bound(p, s1, s2, target(dr));
+      if (by_vertices > bound.dt) {
+        bound.dt = by_vertices;
+        bound.floored = false;
+      }
+    }
+    return bound;
+  }
   ToiBound best;
   for (const DistanceResult& piece : p.cache.piece_results()) {
     if (held_piece(p, piece)) continue;
@@ -181,6 +200,29 @@ ToiBound Simulation::Impl::held_time_of_impact(const PairSet::Pair& p, const Bod
     if (b.dt < best.dt) best = b;
   }
   return best;
+}
+
+double Simulation::Impl::held_vertex_bound(const PairSet::Pair& p, const BodyState& s1,
+                                           const BodyState& s2, double d_target) const {
+  for (int side = 0; side < 2; ++side) {
+    const BodyId id = side == 0 ? p.a : p.b, plane_id = side == 0 ? p.b : p.a;
+    const BodyState& s = side == 0 ? s1 : s2;
+    const BodyState& ps = side == 0 ? s2 : s1;
+    const ShapeGeometry& plane = pairs.geometry(plane_id);
+    if (body(plane_id).motion != MotionKind::kFixed || plane.pieces().size() != 1 ||
+        plane.pieces()[0].kind != ShapeGeometry::PieceKind::kHalfspace) {
+      continue;
+    }
+    const Island* is = planned_island(id);
+    if (!is) continue;
+    const Island::MotionBound b = is->bound(static_cast<std::size_t>(is->index_of(id)));
+    const ShapeGeometry::Piece& half = plane.pieces()[0];
+    const Vec3 n = ps.q_WM * half.normal_M;
+    return vertex_bound_above_plane(
+        s, pairs.geometry(id), n, half.offset + n.dot(ps.x_W), -n.dot(b.a_W) + b.a_slack,
+        b.w_bound * b.w_bound + b.alpha_W.norm() + b.alpha_slack, d_target);
+  }
+  return -1.0;
 }
 
 double Simulation::Impl::next_check_time(const PairSet::Pair& p, const BodyState& s1,

@@ -156,6 +156,11 @@ struct Simulation::Impl {
   // body; aimed at half the gap it has left instead of half the envelope.
   ToiBound held_time_of_impact(const PairSet::Pair& p, const BodyState& s1, const BodyState& s2,
                                const DistanceResult& dr, bool halve_gap) const;
+  // A polyhedral body of a planned island above a fixed halfspace: when one of its vertices can
+  // first come within d_target of the plane (vertex_bound_above_plane, with the island's bounds
+  // on the body's motion); -1 if the pair is not of this kind.
+  double held_vertex_bound(const PairSet::Pair& p, const BodyState& s1, const BodyState& s2,
+                           double d_target) const;
 
   // The next event time of a pair from its closest features at time t.
   // `known`: the contact check_pair already made of this very query and found not approaching
