@@ -895,13 +895,15 @@ std::vector<SupportWatch> support_watch_candidates(const ShapeGeometry::Piece& m
 }  // namespace
 
 double edge_separation(const FeatureMesh& support, const Mat3& R_support,
-                       const Vec3& origin_support, int support_edge, const FeatureMesh& mover,
-                       const Mat3& R_mover, const Vec3& origin_mover, int mover_edge, double sign) {
-  const Vec3 p = origin_support + R_support * support.tail(support_edge);
-  const Vec3 q = origin_mover + R_mover * mover.tail(mover_edge);
-  const Vec3 n = (R_support * (support.head(support_edge) - support.tail(support_edge)))
-                     .cross(R_mover * (mover.head(mover_edge) - mover.tail(mover_edge)));
-  return sign * n.dot(q - p) / n.norm();
+                       const Vec3& origin_support, const FeatureMesh& mover, const Mat3& R_mover,
+                       const Vec3& origin_mover, const EdgeWatch& watch) {
+  const Vec3 p = origin_support + R_support * support.tail(watch.support_edge);
+  const Vec3 q = origin_mover + R_mover * mover.tail(watch.mover_edge);
+  Vec3 n = (R_support * (support.head(watch.support_edge) - support.tail(watch.support_edge)))
+               .cross(R_mover * (mover.head(watch.mover_edge) - mover.tail(watch.mover_edge)));
+  if (n.dot(watch.axis_W) < 0.0) n = -n;                          // the orientation chosen
+  if (!(n.dot(watch.axis_W) > 0.5 * n.norm())) return kInfinity;  // turned through parallel
+  return n.dot(q - p) / n.norm();
 }
 
 std::vector<EdgeWatch> edge_watch_candidates(const ShapeGeometry::Piece& mover, const Mat3& R_mover,
@@ -911,28 +913,31 @@ std::vector<EdgeWatch> edge_watch_candidates(const ShapeGeometry::Piece& mover, 
                                              const Mat3& R_support, const Vec3& origin_support,
                                              double envelope) {
   std::vector<EdgeWatch> out;
-  const FeatureMesh& sm = *support.mesh;
-  const FeatureMesh& mm = *mover.mesh;
-  std::vector<Vec3> mover_W(static_cast<std::size_t>(mm.num_vertices()));
-  for (int v = 0; v < mm.num_vertices(); ++v) mover_W[v] = origin_mover + R_mover * mm.vertex(v);
-  const double reach = mm.max_radius() + envelope;
-  for (int hs = 0; hs < sm.num_half_edges(); ++hs) {
-    if (sm.twin(hs) < hs) continue;
-    const Vec3 p = origin_support + R_support * sm.tail(hs);
-    const Vec3 u = R_support * (sm.head(hs) - sm.tail(hs));
+  const FeatureMesh& support_mesh = *support.mesh;
+  const FeatureMesh& mover_mesh = *mover.mesh;
+  std::vector<Vec3> mover_W(static_cast<std::size_t>(mover_mesh.num_vertices()));
+  for (int v = 0; v < mover_mesh.num_vertices(); ++v)
+    mover_W[v] = origin_mover + R_mover * mover_mesh.vertex(v);
+  const double reach = mover_mesh.max_radius() + envelope;
+  for (int hs = 0; hs < support_mesh.num_half_edges(); ++hs) {
+    if (support_mesh.twin(hs) < hs) continue;
+    const Vec3 p = origin_support + R_support * support_mesh.tail(hs);
+    const Vec3 u = R_support * (support_mesh.head(hs) - support_mesh.tail(hs));
     // Beyond the mover's bounding sphere: nothing of the mover near this edge.
     const double along = std::clamp((origin_mover - p).dot(u) / u.squaredNorm(), 0.0, 1.0);
     if ((p + along * u - origin_mover).norm() > reach) continue;
-    const Vec3 a = R_support * sm.face_normal(sm.face_of(hs));
-    const Vec3 b = R_support * sm.face_normal(sm.face_of(sm.twin(hs)));
-    for (int hm = 0; hm < mm.num_half_edges(); ++hm) {
-      if (mm.twin(hm) < hm) continue;
-      if (held_vertex[mm.tail_vertex(hm)] && held_vertex[mm.head_vertex(hm)]) continue;
-      const Vec3& q = mover_W[mm.tail_vertex(hm)];
-      const Vec3 v = mover_W[mm.head_vertex(hm)] - q;
+    const Vec3 a = R_support * support_mesh.face_normal(support_mesh.face_of(hs));
+    const Vec3 b =
+        R_support * support_mesh.face_normal(support_mesh.face_of(support_mesh.twin(hs)));
+    for (int hm = 0; hm < mover_mesh.num_half_edges(); ++hm) {
+      if (mover_mesh.twin(hm) < hm) continue;
+      if (held_vertex[mover_mesh.tail_vertex(hm)] && held_vertex[mover_mesh.head_vertex(hm)])
+        continue;
+      const Vec3& q = mover_W[mover_mesh.tail_vertex(hm)];
+      const Vec3 v = mover_W[mover_mesh.head_vertex(hm)] - q;
       const Vec3 n = u.cross(v);
       const double n_norm = n.norm();
-      if (!(n_norm > 1e-6 * u.norm() * v.norm())) continue;  // parallel: the faces' watches
+      if (!(n_norm > 1e-3 * u.norm() * v.norm())) continue;  // nearly parallel: faces'
       const double gap = n.dot(q - p) / n_norm;
       if (!(std::abs(gap) <= envelope)) continue;
       // The closest points of the two lines, inside both edges.
@@ -941,12 +946,13 @@ std::vector<EdgeWatch> edge_watch_candidates(const ShapeGeometry::Piece& mover, 
       const double den = uu * vv - uv * uv;
       const double s = (uv * vw - vv * uw) / den, t = (uu * vw - uv * uw) / den;
       if (!(s > 0.0 && s < 1.0 && t > 0.0 && t < 1.0)) continue;
-      const Vec3 c = R_mover * mm.face_normal(mm.face_of(hm));
-      const Vec3 d = R_mover * mm.face_normal(mm.face_of(mm.twin(hm)));
+      const Vec3 c = R_mover * mover_mesh.face_normal(mover_mesh.face_of(hm));
+      const Vec3 d = R_mover * mover_mesh.face_normal(mover_mesh.face_of(mover_mesh.twin(hm)));
       for (const double sign : {1.0, -1.0}) {
         const Vec3 axis = sign * n;
         if (in_normal_cone(axis, a, b) && in_normal_cone(-axis, c, d)) {
-          out.push_back({hs, hm, sign, sign * gap});  // the caller turns it into a threshold
+          // The separation now; the caller turns it into a threshold.
+          out.push_back({hs, hm, axis / n_norm, sign * gap});
           break;
         }
       }
@@ -2018,11 +2024,11 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
       // the other: the mover's edge dips below the support's face just inside its rim, where
       // another vertex of the mover hangs beyond it (the held feature kept above the tilted
       // plane, the face's own plane is not watched). In a pile of 200 hulls, seed 1, p56 held on
-      // a face of p47 by an edge crossed two of p47's edges at its rim 60 um deep (1.4e-5 to
-      // 6e-5 m by a separating-axis test of their states), and the pair was found overlapping
-      // 54,162 times. Watched: each pair of edges whose common normal is a separating axis
-      // candidate (both normal cones), within the envelope, from their separation along it,
-      // with the vertices' thresholds.
+      // a face of p47 by an edge crossed two of p47's edges at its rim, 60.6 um deep along an
+      // edge-edge axis (a brute-force separating-axis test of their states), and the pair was
+      // found overlapping 54,162 times. Watched: each pair of edges whose common normal is a
+      // separating axis candidate (both normal cones), within the envelope, from their separation
+      // along it, with the vertices' thresholds.
       if (edge_watch.size() <= i) edge_watch.resize(i + 1);
       std::vector<EdgeWatch>& edges = edge_watch[i];
       if (fresh) {
@@ -2031,8 +2037,7 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
         for (EdgeWatch& w : edges) w.threshold = threshold(w.threshold);
       }
       for (const EdgeWatch& w : edges) {
-        const double gap = edge_separation(*sp.mesh, R_SP, s_origin, w.support_edge, *piece.mesh, R,
-                                           origin, w.mover_edge, w.sign);
+        const double gap = edge_separation(*sp.mesh, R_SP, s_origin, *piece.mesh, R, origin, w);
         e[8].value = std::min(e[8].value, gap - w.threshold);
       }
     }

@@ -133,22 +133,23 @@ bool place_link(const HeldLink& link, const BodyState& mover, const BodyState& s
 double held_feature_height(const HeldLink& link, const BodyState& mover, const BodyState& support);
 
 // A support's edge watched against one of a held mover's edges (Island::integrate's landing
-// event): their half-edges in the two pieces' meshes, the orientation of their common normal
-// (+1 or -1 times support edge x mover edge, so that it points out of the support), and the
-// threshold their separation along it must stay above (edge_watch_candidates: the separation).
+// event): their half-edges in the two pieces' meshes, their common normal when they were chosen
+// (in the world, pointing out of the support), and the threshold their separation along it must
+// stay above (edge_watch_candidates: the separation).
 struct EdgeWatch {
   int support_edge, mover_edge;
-  double sign, threshold;
+  Vec3 axis_W;
+  double threshold;
 };
 
 // The pairs of edges a held link watches besides its vertices, each with its present separation:
 // an edge of the support and an edge of the mover (not one whose both ends are `held_vertex`,
 // the feature held, whose leaving the patch the tip event watches) whose lines pass within
-// `envelope` of each other at points inside both edges, not parallel, and whose common normal
-// lies in both edges' normal cones (a Minkowski face: along it, the separation of the two edges
-// is the two pieces' separation near there, negative where they cross). These are the crossings
-// that no vertex watch sees: neither body's vertex enters the other. Both pieces are posed in
-// the world (rotation and origin of the piece's frame).
+// `envelope` of each other at points inside both edges, at least 1e-3 rad from parallel, and
+// whose common normal lies in both edges' normal cones (a Minkowski face: along it, the
+// separation of the two edges is the two pieces' separation near there, negative where they
+// cross). These are the crossings that no vertex watch sees: neither body's vertex enters the
+// other. Both pieces are posed in the world (rotation and origin of the piece's frame).
 std::vector<EdgeWatch> edge_watch_candidates(const ShapeGeometry::Piece& mover, const Mat3& R_mover,
                                              const Vec3& origin_mover,
                                              const std::vector<bool>& held_vertex,
@@ -156,11 +157,14 @@ std::vector<EdgeWatch> edge_watch_candidates(const ShapeGeometry::Piece& mover, 
                                              const Mat3& R_support, const Vec3& origin_support,
                                              double envelope);
 
-// The separation of a support's edge and a mover's edge along their common normal, turned out
-// of the support by `sign` (negative: they cross), both meshes posed in the world.
+// The separation of a watched pair of edges along their common normal now, oriented as the
+// watch's axis (out of the support: negative where they cross; the cross product of the edges
+// reverses where they turn through parallel, the axis does not); +inf where the normal has
+// turned more than 60 degrees from the axis, or the edges are parallel (not the configuration
+// chosen: the faces' and vertices' watches cover it). Both meshes posed in the world.
 double edge_separation(const FeatureMesh& support, const Mat3& R_support,
-                       const Vec3& origin_support, int support_edge, const FeatureMesh& mover,
-                       const Mat3& R_mover, const Vec3& origin_mover, int mover_edge, double sign);
+                       const Vec3& origin_support, const FeatureMesh& mover, const Mat3& R_mover,
+                       const Vec3& origin_mover, const EdgeWatch& watch);
 
 // The edge of a link's support face (support_face_S, in the world at `support`) on which all
 // `points` lie, measured within the link's plane (along its normal), to 1e-9 of the face's size;

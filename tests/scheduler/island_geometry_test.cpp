@@ -9,7 +9,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <memory>
+#include <random>
+#include <utility>
 #include <vector>
 
 using namespace palpable;
@@ -71,8 +74,21 @@ std::vector<EdgeWatch> candidates(const PosedPiece& mover, const PosedPiece& sup
 }
 
 double separation(const PosedPiece& mover, const PosedPiece& support, const EdgeWatch& w) {
-  return edge_separation(support.mesh(), support.R, support.origin, w.support_edge, mover.mesh(),
-                         mover.R, mover.origin, w.mover_edge, w.sign);
+  return edge_separation(support.mesh(), support.R, support.origin, mover.mesh(), mover.R,
+                         mover.origin, w);
+}
+
+// The separation of two pieces along `axis`: the mover's least extent along it less the
+// support's greatest.
+double along(const PosedPiece& mover, const PosedPiece& support, const Vec3& axis) {
+  double mover_lo = kInfinity, support_hi = -kInfinity;
+  for (int v = 0; v < mover.mesh().num_vertices(); ++v) {
+    mover_lo = std::min(mover_lo, axis.dot(mover.vertex(v)));
+  }
+  for (int v = 0; v < support.mesh().num_vertices(); ++v) {
+    support_hi = std::max(support_hi, axis.dot(support.vertex(v)));
+  }
+  return mover_lo - support_hi;
 }
 
 // The separating-axis test by brute force: the largest separation of the two pieces along any
@@ -113,11 +129,12 @@ TEST_CASE("island: a held link watches two edges crossing where no vertex enters
   const double h = 0.05, top = h * std::sqrt(2.0);
   const PosedPiece support(ConvexPolyhedron::box(Vec3::Constant(h)),
                            Quat(Eigen::AngleAxisd(kPi / 4, Vec3::UnitX())), Vec3::Zero());
-  auto mover = [&](double x0, double gap, double about_x = 0.0) {
+  // `about_z` turns the mover's edge about the vertical, away from crossing at right angles.
+  auto mover = [&](double x0, double gap, double about_z = 0.0, double y0 = 0.0) {
     return PosedPiece(
         ConvexPolyhedron::box(Vec3::Constant(h)),
-        Quat(Eigen::AngleAxisd(about_x, Vec3::UnitX()) * Eigen::AngleAxisd(kPi / 4, Vec3::UnitY())),
-        Vec3(x0, 0.0, 2.0 * top + gap));
+        Quat(Eigen::AngleAxisd(about_z, Vec3::UnitZ()) * Eigen::AngleAxisd(kPi / 4, Vec3::UnitY())),
+        Vec3(x0, y0, 2.0 * top + gap));
   };
   for (const double gap : {5e-5, 0.0, -3e-5}) {
     CAPTURE(gap);
@@ -130,9 +147,13 @@ TEST_CASE("island: a held link watches two edges crossing where no vertex enters
     CHECK(std::abs(m.edge(watch[0].mover_edge).normalized().y()) == Approx(1.0));
     CHECK(std::abs(separation(m, support, watch[0]) - gap) <= 1e-15);
     CHECK(std::abs(separating_axis(support, m) - gap) <= 1e-15);
-    // Followed as the mover moves down 8e-5 m and sideways along both edges.
-    const PosedPiece lower = mover(0.02, gap - 8e-5);
+    // Followed as the mover moves down 8e-5 m and along both edges, and as it turns: the
+    // separation along the turned edges' normal, as the separating-axis test has it.
+    const PosedPiece lower = mover(0.02, gap - 8e-5, 0.0, 0.01);
     CHECK(std::abs(separation(lower, support, watch[0]) - (gap - 8e-5)) <= 1e-15);
+    const PosedPiece turned = mover(0.01, gap, 0.3);
+    CHECK(std::abs(separation(turned, support, watch[0]) - gap) <= 1e-15);
+    CHECK(std::abs(separating_axis(support, turned) - gap) <= 1e-15);
     // The mover's edge held (both its ends in the held feature): the tip event's, not watched.
     std::vector<bool> held(8, false);
     held[m.mesh().tail_vertex(watch[0].mover_edge)] = true;
@@ -141,10 +162,66 @@ TEST_CASE("island: a held link watches two edges crossing where no vertex enters
   }
   // Farther apart than the envelope (1e-4 m); crossing beyond the end of the support's edge
   // (x0 = 0.06 > 0.05: the mover's edge passes its end vertex, which the vertex watches see);
-  // edges parallel (the mover turned 45 degrees about x too, edge on edge along x): none.
+  // edges parallel or within 1e-3 rad of it (the mover's edge turned onto the support's, edge
+  // on edge along x, 5e-5 m above it): none.
   CHECK(candidates(mover(0.01, 2e-4), support).empty());
   CHECK(candidates(mover(0.06, 5e-5), support).empty());
-  CHECK(candidates(mover(0.01, 5e-5, kPi / 2), support).empty());
+  CHECK(candidates(mover(0.0, 5e-5, kPi / 2), support).empty());
+  CHECK(candidates(mover(0.0, 5e-5, kPi / 2 - 5e-4), support).empty());
+  // Chosen 2e-3 rad from parallel, then turned through it to 1e-8 rad the other side: the
+  // edges' cross product reverses, the separation along the watch's axis does not (the
+  // separating-axis test still has them 5e-5 m apart).
+  const std::vector<EdgeWatch> near = candidates(mover(0.0, 5e-5, kPi / 2 - 2e-3), support);
+  REQUIRE(near.size() == 1);
+  CHECK(separation(mover(0.0, 5e-5, kPi / 2 + 1e-8), support, near[0]) == Approx(5e-5));
+  CHECK(separating_axis(support, mover(0.0, 5e-5, kPi / 2 + 1e-8)) == Approx(5e-5));
+}
+
+TEST_CASE("island: along each watched pair of edges, the separation is the two hulls'",
+          "[island]") {
+  // Random hulls of 10 points placed near touching (the separating-axis test's separation
+  // within 2e-5 m of zero, either side): for every pair of edges watched, its separation is the
+  // two hulls' along its axis (the mover's least extent less the support's greatest), so the
+  // axis lies in both edges' normal cones, oriented out of the support, and no more than the
+  // separating-axis test's. Where that axis is the one the test finds, the two agree.
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  auto hull = [&] {
+    std::vector<Vec3> points;
+    for (int k = 0; k < 10; ++k) points.push_back(0.02 * Vec3(u(rng), u(rng), u(rng)));
+    return ConvexPolyhedron::from_points(points);
+  };
+  auto turn = [&] { return Quat(u(rng), u(rng), u(rng), u(rng)).normalized(); };
+  int watched = 0, deepest_is_sat = 0;
+  for (int trial = 0; trial < 1500; ++trial) {
+    const PosedPiece support(hull(), turn(), Vec3::Zero());
+    const Vec3 direction = Vec3(u(rng), u(rng), u(rng)).normalized();
+    const ConvexPolyhedron shape = hull();
+    const Quat q = turn();
+    // Along `direction`, bisected to where the separating-axis test reads `target`.
+    const double target = 2e-5 * u(rng);
+    double lo = 0.0, hi = 0.1;
+    for (int it = 0; it < 80; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      (separating_axis(support, PosedPiece(shape, q, mid * direction)) < target ? lo : hi) = mid;
+    }
+    const PosedPiece mover(shape, q, hi * direction);
+    const double sat = separating_axis(support, mover);
+    double deepest = kInfinity;
+    for (const EdgeWatch& w : candidates(mover, support)) {
+      ++watched;
+      const double g = separation(mover, support, w);
+      CHECK(std::abs(g - along(mover, support, w.axis_W)) <= 1e-12);
+      CHECK(g <= sat + 1e-12);
+      deepest = std::min(deepest, g);
+    }
+    if (std::abs(deepest - sat) <= 1e-12) ++deepest_is_sat;
+  }
+  std::printf(
+      "edge watch: %d pairs watched over 1500 placements, the separating-axis value in %d\n",
+      watched, deepest_is_sat);
+  CHECK(watched > 500);
+  CHECK(deepest_is_sat > 100);
 }
 
 TEST_CASE("island: the edge watch sees the crossing of two hulls in a pile", "[island]") {
