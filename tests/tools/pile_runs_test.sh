@@ -127,6 +127,19 @@ if run_pile tilt "50 hull 0.3 --seed 3" --summary-json "$work/tilt.summary.json"
   below "$work/tilt.summary.json" "50 hull 0.3 --seed 3" floored_bounds 5000 \
     "floored time-of-impact bounds"
 fi
+# The first 0.3 s of 200 hulls, seed 1 (12 s of CPU). A hull held in an island with a corner
+# 3e-11 m above the floor, receding, was bounded by its reach turning at the island's angular-speed
+# bound and checked every 3e-11 s: 493,055 floored bounds, 452,612 of them such pairs. Its vertices
+# now bound it (25,628). On that path a vertex of p197, held again on a face of p44 at the face's
+# edge where it had just tipped over it, was off the face from the motion's start, so its tip
+# event never crossed: it held no force and sank 4.5 um into the face (323 overlapping queries).
+# Such a link now tips at once (1 overlapping query left, 3.4e-13 m: rounding at a release).
+if run_pile floor200 "200 hull 0.3 --seed 1" --summary-json "$work/floor200.summary.json"; then
+  below "$work/floor200.summary.json" "200 hull 0.3 --seed 1" penetrations 5 \
+    "queries finding bodies overlapping"
+  below "$work/floor200.summary.json" "200 hull 0.3 --seed 1" floored_bounds 100000 \
+    "floored time-of-impact bounds"
+fi
 # Rest, judged from the trace alone (tools/stacks/judge.py): 50 hulls over 10 s. Seed 5 kept a
 # lone hull rocking on the floor for ever (each fourth quiet landing kicked it back up at v_micro)
 # and a cluster pumped by microcollisions between hulls leaning edge on edge; seed 8 left a hull
