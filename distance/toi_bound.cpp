@@ -198,11 +198,21 @@ ToiMotion toi_motion(const Body& body, const BodyState& state, const ShapeGeomet
   return m;
 }
 
-double vertex_bound_above_plane(const BodyState& s, const ShapeGeometry& g, const Vec3& n_W,
-                                double offset, double closing, double spin, double d_target) {
+const ShapeGeometry::Piece* halfspace(const ShapeGeometry& g) {
+  if (g.pieces().size() != 1) return nullptr;
+  const ShapeGeometry::Piece& p = g.pieces()[0];
+  return p.kind == ShapeGeometry::PieceKind::kHalfspace ? &p : nullptr;
+}
+
+double vertex_bound_above_plane(const BodyState& s, const ShapeGeometry& g, const BodyState& plane,
+                                const ShapeGeometry::Piece& half, const Vec3& accel_W,
+                                double accel_slack, double spin, double d_target) {
   for (const ShapeGeometry::Piece& piece : g.pieces()) {
     if (piece.kind != ShapeGeometry::PieceKind::kPolyhedron || !piece.mesh) return -1.0;
   }
+  const Vec3 n_W = plane.q_WM * half.normal_M;
+  const double offset = half.offset + n_W.dot(plane.x_W);
+  const double closing = -n_W.dot(accel_W) + accel_slack;
   const Mat3 R_WM = s.q_WM.toRotationMatrix();
   double best = kInfinity;
   for (const ShapeGeometry::Piece& piece : g.pieces()) {
@@ -229,12 +239,6 @@ const ShapeGeometry::Piece* centred_sphere(const ShapeGeometry& g) {
   if (g.pieces().size() != 1) return nullptr;
   const ShapeGeometry::Piece& p = g.pieces()[0];
   return p.kind == ShapeGeometry::PieceKind::kSphere && p.p_M.norm() == 0.0 ? &p : nullptr;
-}
-
-const ShapeGeometry::Piece* halfspace(const ShapeGeometry& g) {
-  if (g.pieces().size() != 1) return nullptr;
-  const ShapeGeometry::Piece& p = g.pieces()[0];
-  return p.kind == ShapeGeometry::PieceKind::kHalfspace ? &p : nullptr;
 }
 
 // Sphere (dynamic) against a halfspace whose motion maps its plane onto itself.
@@ -267,13 +271,12 @@ double ballistic_vertex_bound(const Body& body, const BodyState& s, const ShapeG
                               const ShapeGeometry::Piece& half, const Vec3& gravity_W,
                               double d_target) {
   if (!body.is_dynamic() || plane_body.motion != MotionKind::kFixed) return -1.0;
-  const Vec3 n = p.q_WM * half.normal_M;
   const Vec3& I = body.mass.principal_moments;
   const double alpha_bar = I.minCoeff() > 0.0
                                ? w_bar * w_bar * (I.maxCoeff() - I.minCoeff()) / I.minCoeff()
                                : kInfinity;
-  return vertex_bound_above_plane(s, g, n, half.offset + n.dot(p.x_W), -n.dot(gravity_W),
-                                  w_bar * w_bar + alpha_bar, d_target);
+  return vertex_bound_above_plane(s, g, p, half, gravity_W, 0.0, w_bar * w_bar + alpha_bar,
+                                  d_target);
 }
 
 }  // namespace

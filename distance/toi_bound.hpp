@@ -77,17 +77,22 @@ double solve_gap_closing(double a, double b, double delta);
 // +inf without a closing acceleration (a <= 0).
 double solve_return_to_gap(double a, double b, double delta);
 
-// A polyhedral body (every piece a polyhedron) above a plane {x : n_W . x <= offset} that does
-// not move: its gap is the least height of its vertices, and each vertex's height obeys
+// The single halfspace piece of a geometry, or nullptr.
+const ShapeGeometry::Piece* halfspace(const ShapeGeometry& g);
+
+// A polyhedral body (every piece a polyhedron) above the plane of `half`, a halfspace piece of a
+// body at state `plane` that does not move: its gap is the least height of its vertices, and
+// each vertex's height obeys
 //   h(t) >= h - b t - A t^2 / 2,   b = -n . (v + ω x r)  (its closing speed now, exact),
-//   A = closing + |r| spin,
-// r the vertex from the centre of mass, `closing` a bound on the centre of mass's acceleration
-// towards the plane, `spin` one on ω^2 + |ω'| over the interval (ω̄^2 + ᾱ). Returns the least
-// time over the vertices (the branches of toi_bound) at which one can come within d_target of the
-// plane; -1 if a piece is not a polyhedron or a vertex lies below the plane (not this bound's
-// case); 0 if a vertex can be there now.
-double vertex_bound_above_plane(const BodyState& s, const ShapeGeometry& g, const Vec3& n_W,
-                                double offset, double closing, double spin, double d_target);
+//   A = -n . accel_W + accel_slack + |r| spin,
+// r the vertex from the centre of mass, accel_W the centre of mass's acceleration (within
+// accel_slack of it over the interval), `spin` a bound on ω^2 + |ω'| over the interval (ω̄^2 +
+// ᾱ). Returns the least time over the vertices (the branches of toi_bound) at which one can
+// come within d_target of the plane; -1 if a piece is not a polyhedron or a vertex lies below
+// the plane (not this bound's case); 0 if a vertex can be there now.
+double vertex_bound_above_plane(const BodyState& s, const ShapeGeometry& g, const BodyState& plane,
+                                const ShapeGeometry::Piece& half, const Vec3& accel_W,
+                                double accel_slack, double spin, double d_target);
 
 // The conservative bound from the closest-feature result (status separated or touching; any other
 // status gives dt = 0). d_target [m] < envelope. A pair already inside the target gap and

@@ -4,6 +4,7 @@
 #include "core/check.hpp"
 #include "core/convex_polygon.hpp"
 #include "core/event_location.hpp"
+#include "distance/vclip.hpp"
 #include "impulse/microcollision.hpp"
 
 #include <algorithm>
@@ -938,13 +939,13 @@ std::vector<EdgeWatch> edge_watch_candidates(const ShapeGeometry::Piece& mover, 
       const Vec3 n = u.cross(v);
       const double n_norm = n.norm();
       if (!(n_norm > 1e-3 * u.norm() * v.norm())) continue;  // nearly parallel: faces'
-      const double gap = n.dot(q - p) / n_norm;
+      const double gap = n.dot(q - p) / n_norm;  // the lines' distance, at most the edges'
       if (!(std::abs(gap) <= envelope)) continue;
-      // The closest points of the two lines, inside both edges.
-      const Vec3 w = p - q;
-      const double uu = u.dot(u), uv = u.dot(v), vv = v.dot(v), uw = u.dot(w), vw = v.dot(w);
-      const double den = uu * vv - uv * uv;
-      const double s = (uv * vw - vv * uw) / den, t = (uu * vw - uv * uw) / den;
+      // The edges' closest points, inside both (a segment's closest point clamped to an end
+      // means the lines' lies beyond it): then the edges' distance is the lines'.
+      double s = 0.0, t = 0.0;
+      Vec3 on_support, on_mover;
+      closest_params_segment_segment(p, p + u, q, q + v, s, t, on_support, on_mover);
       if (!(s > 0.0 && s < 1.0 && t > 0.0 && t < 1.0)) continue;
       const Vec3 c = R_mover * mover_mesh.face_normal(mover_mesh.face_of(hm));
       const Vec3 d = R_mover * mover_mesh.face_normal(mover_mesh.face_of(mover_mesh.twin(hm)));
@@ -1825,9 +1826,15 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
     return dy;
   };
   // The event functions at a state.
-  std::vector<double> landing_threshold;  // per link [m] (see below)
-  std::vector<std::vector<SupportWatch>> support_watch;  // per link (see below)
-  std::vector<std::vector<EdgeWatch>> edge_watch;        // per link (see below)
+  // What each link's landing event watches (see below), chosen afresh at each step's start:
+  // the level its mover's lowest other vertex (a curved shape's rise) must stay above (-inf:
+  // not chosen yet), and the support's vertices and pairs of edges, each with its own.
+  struct LandingWatch {
+    double threshold = -kInfinity;
+    std::vector<SupportWatch> support;
+    std::vector<EdgeWatch> edges;
+  };
+  std::vector<LandingWatch> landing(links.size());
   // A fixed block of event functions per link (their kinds follow the link's modes, which do not
   // change within a motion), so that the values at two states line up entry by entry.
   std::vector<bool> held_vertex;  // the mover's vertices in the link's held feature (scratch)
@@ -1953,12 +1960,11 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
         // It lands when it comes within the landing level of the touching point: the contact then
         // turns into the cap's face or the side's line. Within that level already at the step's
         // start (a side just tipped onto its rim), as soon as it goes down at all.
-        if (landing_threshold.size() <= i) landing_threshold.resize(i + 1, -kInfinity);
-        if (landing_threshold[i] == -kInfinity) {
+        if (landing[i].threshold == -kInfinity) {
           const double level = landing_level(c.n_W.dot(c.c_W - plane), settings.envelope_m);
-          landing_threshold[i] = rise <= level ? rise - 1e-12 * size : level;
+          landing[i].threshold = rise <= level ? rise - 1e-12 * size : level;
         }
-        e[8].value = rise - landing_threshold[i];
+        e[8].value = rise - landing[i].threshold;
         continue;
       }
       double lowest = kInfinity;
@@ -1981,7 +1987,7 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
       // quarter envelope), or half the lowest other vertex's height if that is lower: a vertex
       // that halves its height within a step lands, whatever it did before (a body rocking on
       // an edge with the rest of its face just above the plane must not sink into it).
-      if (landing_threshold.size() <= i) landing_threshold.resize(i + 1, -kInfinity);
+      LandingWatch& watch = landing[i];
       const double feature_level = std::max(feature_lowest, 0.5 * settings.envelope_m);
       // A vertex on the plane already (to its resolution, kPlaneResolution of the body's size:
       // a face held at a gap of zero, its body tipped onto one of its edges) lands as soon as
@@ -1991,9 +1997,9 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
                    ? height - 1e-12 * size
                    : 0.5 * std::max(0.0, std::min(feature_level, height));
       };
-      const bool fresh = landing_threshold[i] == -kInfinity;
-      if (fresh) landing_threshold[i] = threshold(lowest);
-      e[8].value = lowest - landing_threshold[i];
+      const bool fresh = watch.threshold == -kInfinity;
+      if (fresh) watch.threshold = threshold(lowest);
+      e[8].value = lowest - watch.threshold;
       // And the support's vertices landing on the mover: a held link keeps the mover's feature
       // at its height above the plane, and the plane is the query's normal, tilted from the faces
       // where they are not parallel; the feature sliding over it, a face of the mover tilted from
@@ -2004,19 +2010,17 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
       // face value, a lower bound of its distance) is within the envelope and faces the support
       // within 0.1 rad but not parallel to the plane (a face held flat keeps its height), from
       // that face's plane, with the other vertices' thresholds.
-      if (support_watch.size() <= i) support_watch.resize(i + 1);
       const ShapeGeometry& gs = *geometry[link.support.index];
       if (gs.pieces().size() != 1 || !gs.pieces()[0].mesh) continue;
       const ShapeGeometry::Piece& sp = gs.pieces()[0];
       const Mat3 R_SP = R_S * sp.R_M;
       const Vec3 s_origin = ss.x_W + R_S * sp.p_M;
-      std::vector<SupportWatch>& watch = support_watch[i];
       if (fresh) {
-        watch = support_watch_candidates(piece, R, origin, sp, R_SP, s_origin, c.n_W,
-                                         settings.envelope_m);
-        for (SupportWatch& w : watch) w.threshold = threshold(w.threshold);
+        watch.support = support_watch_candidates(piece, R, origin, sp, R_SP, s_origin, c.n_W,
+                                                 settings.envelope_m);
+        for (SupportWatch& w : watch.support) w.threshold = threshold(w.threshold);
       }
-      for (const SupportWatch& w : watch) {
+      for (const SupportWatch& w : watch.support) {
         const Vec3 q = vertex_in_mover(sp, R_SP, s_origin, R, origin, w.vertex);
         e[8].value = std::min(e[8].value, piece.mesh->face_eval(w.face, q) - w.threshold);
       }
@@ -2029,14 +2033,12 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
       // found overlapping 54,162 times. Watched: each pair of edges whose common normal is a
       // separating axis candidate (both normal cones), within the envelope, from their separation
       // along it, with the vertices' thresholds.
-      if (edge_watch.size() <= i) edge_watch.resize(i + 1);
-      std::vector<EdgeWatch>& edges = edge_watch[i];
       if (fresh) {
-        edges = edge_watch_candidates(piece, R, origin, held_vertex, sp, R_SP, s_origin,
-                                      settings.envelope_m);
-        for (EdgeWatch& w : edges) w.threshold = threshold(w.threshold);
+        watch.edges = edge_watch_candidates(piece, R, origin, held_vertex, sp, R_SP, s_origin,
+                                            settings.envelope_m);
+        for (EdgeWatch& w : watch.edges) w.threshold = threshold(w.threshold);
       }
-      for (const EdgeWatch& w : edges) {
+      for (const EdgeWatch& w : watch.edges) {
         const double gap = edge_separation(*sp.mesh, R_SP, s_origin, *piece.mesh, R, origin, w);
         e[8].value = std::min(e[8].value, gap - w.threshold);
       }
@@ -2299,7 +2301,7 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
     k0 = clocked ? dopri5::State(step.k[6].head(time_index) * speed_scale / step.k[6](time_index))
                  : step.k[6];
     record_step_start(t, y);
-    landing_threshold.clear();
+    for (LandingWatch& w : landing) w.threshold = -kInfinity;
     g_prev = events(t, y);
     choose_clock(t, y);
   }

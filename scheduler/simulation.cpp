@@ -208,19 +208,14 @@ double Simulation::Impl::held_vertex_bound(const PairSet::Pair& p, const BodySta
     const BodyId id = side == 0 ? p.a : p.b, plane_id = side == 0 ? p.b : p.a;
     const BodyState& s = side == 0 ? s1 : s2;
     const BodyState& ps = side == 0 ? s2 : s1;
-    const ShapeGeometry& plane = pairs.geometry(plane_id);
-    if (body(plane_id).motion != MotionKind::kFixed || plane.pieces().size() != 1 ||
-        plane.pieces()[0].kind != ShapeGeometry::PieceKind::kHalfspace) {
-      continue;
-    }
+    const ShapeGeometry::Piece* half = halfspace(pairs.geometry(plane_id));
+    if (body(plane_id).motion != MotionKind::kFixed || !half) continue;
     const Island* is = planned_island(id);
     if (!is) continue;
     const Island::MotionBound b = is->bound(static_cast<std::size_t>(is->index_of(id)));
-    const ShapeGeometry::Piece& half = plane.pieces()[0];
-    const Vec3 n = ps.q_WM * half.normal_M;
-    return vertex_bound_above_plane(
-        s, pairs.geometry(id), n, half.offset + n.dot(ps.x_W), -n.dot(b.a_W) + b.a_slack,
-        b.w_bound * b.w_bound + b.alpha_W.norm() + b.alpha_slack, d_target);
+    return vertex_bound_above_plane(s, pairs.geometry(id), ps, *half, b.a_W, b.a_slack,
+                                    b.w_bound * b.w_bound + b.alpha_W.norm() + b.alpha_slack,
+                                    d_target);
   }
   return -1.0;
 }

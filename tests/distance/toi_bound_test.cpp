@@ -450,7 +450,8 @@ TEST_CASE("a held body's vertices above a fixed plane: the bound never overshoot
   std::mt19937_64 rng(20261129);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   const std::vector<TestShape> shapes = {cube(), tetrahedron(), coin(), sliver()};
-  const Vec3 n = Vec3::UnitZ();
+  const TestShape floor = make_test_shape("floor", make_halfspace(Vec3::UnitZ(), 0.0));
+  const Vec3 n = Vec3::UnitZ();  // the floor's normal: its solid lies below z = 0
   const double T = 0.05;
   int reached = 0, overshoots = 0;
   for (int trial = 0; trial < 600; ++trial) {
@@ -476,8 +477,8 @@ TEST_CASE("a held body's vertices above a fixed plane: the bound never overshoot
     const double w_bar = s.w_W.norm() + alpha0.norm() * T + beta;
     const double d_target = 0.5 * h0;
     const double bound =
-        vertex_bound_above_plane(s, *shape.geometry, n, 0.0, -n.dot(a0) + slack,
-                                 w_bar * w_bar + alpha0.norm() + beta * kappa, d_target);
+        vertex_bound_above_plane(s, *shape.geometry, BodyState{}, *halfspace(*floor.geometry), a0,
+                                 slack, w_bar * w_bar + alpha0.norm() + beta * kappa, d_target);
     REQUIRE(bound >= 0.0);
     auto omega = [&](double t) {
       return Vec3(s.w_W + alpha0 * t + beta * std::sin(kappa * t) * spin_axis);
