@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 namespace palpable {
 
@@ -228,6 +229,57 @@ double vertex_bound_above_plane(const BodyState& s, const ShapeGeometry& g, cons
       best = std::min(best, dt);
       if (!(best > 0.0)) return 0.0;
     }
+  }
+  return best;
+}
+
+double vertex_bound_above_face(const BodyState& sa, const ShapeGeometry& ga, const VertexMotion& ma,
+                               const BodyState& sb, const ShapeGeometry::Piece& piece, int face,
+                               const VertexMotion& mb, double d_target) {
+  for (const ShapeGeometry::Piece& p : ga.pieces()) {
+    if (p.kind != ShapeGeometry::PieceKind::kPolyhedron || !p.mesh) return -1.0;
+  }
+  if (piece.kind != ShapeGeometry::PieceKind::kPolyhedron || !piece.mesh) return -1.0;
+  const Mat3 R_B = sb.q_WM.toRotationMatrix();
+  const Vec3 n = R_B * (piece.R_M * piece.mesh->face_normal(face));
+  const double offset = n.dot(sb.x_W + R_B * piece.p_M) + piece.mesh->face_offset(face);
+  const Vec3 da = ma.accel_W - mb.accel_W;
+  const double slacks = ma.accel_slack + mb.accel_slack;
+  const double accel = ma.accel_W.norm() + mb.accel_W.norm() + slacks;
+  const double spin_a = ma.w_bound * ma.w_bound + ma.alpha_bound;
+  const double spin_b = mb.w_bound * mb.w_bound + mb.alpha_bound;
+  const Vec3 dv = sa.v_W - sb.v_W;
+  const Mat3 R_A = sa.q_WM.toRotationMatrix();
+  // The vertices' heights, closing speeds and offsets, once.
+  struct Vertex {
+    double h, b, r, rho;
+  };
+  std::vector<Vertex> vertices;
+  for (const ShapeGeometry::Piece& p : ga.pieces()) {
+    for (int k = 0; k < p.mesh->num_vertices(); ++k) {
+      const Vec3 r = R_A * (p.p_M + p.R_M * p.mesh->vertex(k));
+      const Vec3 rho = sa.x_W + r - sb.x_W;
+      const double h = n.dot(rho) + n.dot(sb.x_W) - offset;
+      if (!(h >= 0.0)) return -1.0;  // overlapping (to rounding, or more): not this bound's case
+      // h' = (w_B x n) . rho + n . (v_A + w_A x r - v_B)
+      const double rate = sb.w_W.cross(n).dot(rho) + n.dot(dv + sa.w_W.cross(r));
+      vertices.push_back({h, -rate, r.norm(), rho.norm()});
+    }
+  }
+  double best = 0.0;
+  for (const double horizon : {1e-5, 1e-4, 1e-3, 1e-2}) {
+    double dt = horizon;
+    for (const Vertex& v : vertices) {
+      const double U = dv.norm() + ma.w_bound * v.r + accel * horizon;
+      const double A = -n.dot(da) + mb.w_bound * horizon * da.norm() + slacks + spin_a * v.r +
+                       spin_b * (v.rho + U * horizon) + 2.0 * mb.w_bound * U;
+      const double delta = v.h - d_target;
+      const double t = delta <= 0.0 && v.b < 0.0 ? solve_return_to_gap(A, v.b, delta)
+                                                 : solve_gap_closing(A, v.b, delta);
+      dt = std::min(dt, t);
+      if (!(dt > 0.0)) break;
+    }
+    best = std::max(best, dt);
   }
   return best;
 }

@@ -94,6 +94,32 @@ double vertex_bound_above_plane(const BodyState& s, const ShapeGeometry& g, cons
                                 const ShapeGeometry::Piece& half, const Vec3& accel_W,
                                 double accel_slack, double spin, double d_target);
 
+// How a body may move over an interval, for vertex_bound_above_face: its centre of mass's
+// acceleration within accel_slack of accel_W, |ω| <= w_bound and |ω'| <= alpha_bound throughout
+// (all zero for a body that does not move).
+struct VertexMotion {
+  Vec3 accel_W = Vec3::Zero();
+  double accel_slack = 0.0;
+  double w_bound = 0.0;
+  double alpha_bound = 0.0;
+};
+
+// A polyhedral body A (state sa, geometry ga, motion ma) above the plane of face `face` of
+// `piece`, a polyhedral piece of a body B (state sb, motion mb) that moves too: B lies below that
+// plane, so A cannot touch B before a vertex of A reaches it. With n the plane's normal and
+// rho = q - x_B a vertex q of A from B's centre of mass, its height h = n . rho - d obeys
+//   h'' = n'' . rho + 2 n' . rho' + n . rho'',   |n'| <= w_B, |n''| <= w_B^2 + alpha_B,
+//   n . rho'' >= n0 . (a_A - a_B) - w_B t |a_A - a_B| - slacks - (w_A^2 + alpha_A) |r_A|,
+// r_A the vertex from A's centre, |rho'| <= U = |v_A - v_B| + w_A |r_A| + (|a_A| + |a_B| +
+// slacks) t and |rho| <= |rho0| + U t over [0, t]: h(t) >= h - b t - A t^2 / 2 with b its exact
+// closing speed now. Bounded over horizons of 1e-5, 1e-4, 1e-3 and 1e-2 s (each bound, capped at
+// its horizon, holds), the largest is returned: the least time at which a vertex can come within
+// d_target of the plane, at most 1e-2 s. -1 if a piece of A is not a polyhedron or a vertex of A
+// lies below the plane (not this bound's case); 0 if a vertex can be there now.
+double vertex_bound_above_face(const BodyState& sa, const ShapeGeometry& ga, const VertexMotion& ma,
+                               const BodyState& sb, const ShapeGeometry::Piece& piece, int face,
+                               const VertexMotion& mb, double d_target);
+
 // The conservative bound from the closest-feature result (status separated or touching; any other
 // status gives dt = 0). d_target [m] < envelope. A pair already inside the target gap and
 // receding (closing speed b < 0) gets the time its gap can be back at its present value,

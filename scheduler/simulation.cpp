@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <map>
+#include <optional>
 #include <sstream>
 
 namespace palpable {
@@ -185,7 +186,12 @@ ToiBound Simulation::Impl::held_time_of_impact(const PairSet::Pair& p, const Bod
       // (time_of_impact), by what each truly does: its speed along the normal now, and a bound on
       // its acceleration from the island's (the centre of mass's, and w^2 + |w'| times its
       // distance from the centre of mass). Both bounds are lower bounds on the same instant.
-      const double by_vertices = held_vertex_bound(p, s1, s2, target(dr));
+      double by_vertices = held_vertex_bound(p, s1, s2, target(dr));
+      // And a vertex above a face of a body that moves too: two held hulls of a pile, in
+      // islands of their own, a vertex of one resting 1e-11 to 1e-7 m over a face of the other
+      // with nothing pressing them together, were checked at the floor 493,000 times in 0.3 s
+      // (the p44-p197 pair of 200 hulls, seed 1, on the path the next commit's sliding rule takes).
+      if (by_vertices < 0.0) by_vertices = held_face_bound(p, s1, s2, dr, target(dr));
       if (by_vertices > bound.dt) {
         bound.dt = by_vertices;
         bound.floored = false;
@@ -218,6 +224,51 @@ double Simulation::Impl::held_vertex_bound(const PairSet::Pair& p, const BodySta
                                     d_target);
   }
   return -1.0;
+}
+
+double Simulation::Impl::held_face_bound(const PairSet::Pair& p, const BodyState& s1,
+                                         const BodyState& s2, const DistanceResult& dr,
+                                         double d_target) const {
+  const bool face_on_a =
+      dr.feature1.kind == FeatureKind::kFace && dr.feature2.kind == FeatureKind::kVertex;
+  const bool face_on_b =
+      dr.feature2.kind == FeatureKind::kFace && dr.feature1.kind == FeatureKind::kVertex;
+  if (!face_on_a && !face_on_b) return -1.0;
+  const BodyId face_id = face_on_a ? p.a : p.b, vertex_id = face_on_a ? p.b : p.a;
+  const BodyState& sf = face_on_a ? s1 : s2;
+  const BodyState& sv = face_on_a ? s2 : s1;
+  const std::vector<ShapeGeometry::Piece>& pieces = pairs.geometry(face_id).pieces();
+  const int piece = face_on_a ? dr.piece1 : dr.piece2;
+  if (piece < 0 || piece >= static_cast<int>(pieces.size())) return -1.0;
+  // Each body's motion over the coming interval: its island's bounds, free flight's (gravity,
+  // its angular-speed bound, and the torque-free bound on its angular acceleration), or none.
+  auto motion = [&](BodyId id, const BodyState& s, const BodyState& other,
+                    BodyId other_id) -> std::optional<VertexMotion> {
+    VertexMotion m;
+    if (body(id).motion == MotionKind::kFixed) return m;
+    if (const Island* is = planned_island(id)) {
+      const Island::MotionBound b = is->bound(static_cast<std::size_t>(is->index_of(id)));
+      m.accel_W = b.a_W;
+      m.accel_slack = b.a_slack;
+      m.w_bound = b.w_bound;
+      m.alpha_bound = b.alpha_W.norm() + b.alpha_slack;
+      return m;
+    }
+    if (!in_free_flight(id)) return std::nullopt;
+    const Vec3& I = body(id).mass.principal_moments;
+    m.accel_W = world.gravity_W;
+    m.w_bound = motion_for(id, s, other, other_id).omega_bound;
+    m.alpha_bound = I.minCoeff() > 0.0
+                        ? m.w_bound * m.w_bound * (I.maxCoeff() - I.minCoeff()) / I.minCoeff()
+                        : kInfinity;
+    return m;
+  };
+  const std::optional<VertexMotion> mf = motion(face_id, sf, sv, vertex_id);
+  const std::optional<VertexMotion> mv = motion(vertex_id, sv, sf, face_id);
+  if (!mf || !mv) return -1.0;
+  const int face = face_on_a ? dr.feature1.index : dr.feature2.index;
+  return vertex_bound_above_face(sv, pairs.geometry(vertex_id), *mv, sf,
+                                 pieces[static_cast<std::size_t>(piece)], face, *mf, d_target);
 }
 
 double Simulation::Impl::next_check_time(const PairSet::Pair& p, const BodyState& s1,

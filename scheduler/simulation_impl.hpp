@@ -161,6 +161,12 @@ struct Simulation::Impl {
   // on the body's motion); -1 if the pair is not of this kind.
   double held_vertex_bound(const PairSet::Pair& p, const BodyState& s1, const BodyState& s2,
                            double d_target) const;
+  // A pair whose closest features are a vertex and a face, of polyhedra, where the face's body
+  // moves too: when a vertex of the one can first come within d_target of the other's face plane
+  // (vertex_bound_above_face, each body's motion bounded by its island, as in free flight, or
+  // not moving if fixed); -1 if the pair is not of this kind.
+  double held_face_bound(const PairSet::Pair& p, const BodyState& s1, const BodyState& s2,
+                         const DistanceResult& dr, double d_target) const;
 
   // The next event time of a pair from its closest features at time t.
   // `known`: the contact check_pair already made of this very query and found not approaching

@@ -59,7 +59,7 @@ const Expected kExpected[] = {
     {"balls_in_dish.json", 0xb0599439c6344c91ull},
     {"block_on_ramp_accelerating.json", 0x7baccee39ea4ad1eull},
     {"block_on_ramp_decelerating.json", 0x8369ce1c7eaca70aull},
-    {"bowling.json", 0xfa11b2fd11fca831ull},
+    {"bowling.json", 0x0c60efe000d66936ull},
     {"chain_of_balls.json", 0x42e3fa46cddd6d8dull},
     {"coins.json", 0xe5d47de15bc0a5faull},
     {"cylinder_rolling_slope.json", 0x4bc4bf6ecb23e51aull},
