@@ -964,6 +964,19 @@ std::optional<Vec2> growing_direction(double theta0, Rate&& rate_along) {
   return std::nullopt;
 }
 
+// The slip rate of contacts[i] sliding along d, in (t1, t2), as a function of d (it sets
+// contacts[i].slip_dir to d); nullopt where the problem fails.
+auto slip_rate_along(const std::vector<HeldBody>& bodies, std::vector<HeldContact>& contacts,
+                     std::size_t i) {
+  return [&bodies, &contacts, i](const Vec2& d) -> std::optional<Vec2> {
+    HeldContact& c = contacts[i];
+    c.slip_dir = d;
+    const HeldSolution trial = solve_held(bodies, contacts);
+    if (trial.status != HeldStatus::kOk) return std::nullopt;
+    return plane_coords(c, trial.motion[i].slip_rate_W);
+  };
+}
+
 // The direction a sticking contact beyond its cone starts to slide in: the one along which its
 // sliding acceleration points (a fixed point: the unique direction), from `start`, the opposite
 // of the friction sticking needed. Iterated d <- rate(d) / |rate(d)|; where that cycles instead
@@ -976,14 +989,7 @@ std::optional<Vec2> growing_direction(double theta0, Rate&& rate_along) {
 std::optional<Vec2> unstable_stick_direction(const std::vector<HeldBody>& bodies,
                                              std::vector<HeldContact>& contacts, std::size_t i,
                                              const Vec2& start) {
-  HeldContact& c = contacts[i];
-  // The slip rate sliding along d, in (along d, across d); nullopt if the problem fails.
-  auto rate_along = [&](const Vec2& d) -> std::optional<Vec2> {
-    c.slip_dir = d;
-    const HeldSolution trial = solve_held(bodies, contacts);
-    if (trial.status != HeldStatus::kOk) return std::nullopt;
-    return plane_coords(c, trial.motion[i].slip_rate_W);
-  };
+  auto rate_along = slip_rate_along(bodies, contacts, i);
   Vec2 dir = start;
   for (int iteration = 0; iteration < 50; ++iteration) {
     const std::optional<Vec2> rate = rate_along(dir);
@@ -995,28 +1001,28 @@ std::optional<Vec2> unstable_stick_direction(const std::vector<HeldBody>& bodies
   return growing_direction(std::atan2(start.y(), start.x()), rate_along);
 }
 
-// The direction a contact whose rolling resistance cannot hold it starts to roll in: d with
-// its rolling acceleration rate(d) = lambda d, lambda > 0, rolling along d. Where the normal
-// forces do not depend on d, rate(d) = a + B d is affine (the resistance's couple is linear in
-// d): fitted from three solves (along e1, -e1, e2), d = (lambda I - B)^-1 a with |d| = 1, lambda
-// found by bisection on [0, |a| + |B|] (beyond it |d| < 1). Nullopt if a solve fails, if no such
-// lambda exists (the resistance can hold it: `holds`), or if the rolling along d does not grow
-// along d.
-// (Iterated d <- rate(d) / |rate(d)| the direction cycled: a ball on a ball in a pile, 16
-// rounds without settling at each of 9,000 plans; the search of every direction the slips use,
-// unstable_stick_direction, took 367 solves a start.) Leaves contacts[i] rolling along the
-// direction tried last.
-std::optional<Vec2> roll_start_direction(const std::vector<HeldBody>& bodies,
-                                         std::vector<HeldContact>& contacts, std::size_t i,
-                                         bool* holds = nullptr) {
-  HeldContact& c = contacts[i];
+// How affine_growing_direction's refinement settles: on the sine of the angle from d to rate(d)
+// within `sine` (a start from rest, where the rate is of the order of the friction's), or, with
+// `rate` > 0, on the rate across d within `rate` times |B| (a slip at the edge of its cone, its
+// rate along d small: there the sine swings from -1 to 1 within an angle of lambda / |B|, which
+// a secant step overshoots, and a sine of 1e-9 may be out of reach of the solves).
+struct Settle {
+  double sine = 1e-6;
+  double rate = 0.0;
+};
+
+// Of the directions d along which rate(d) = lambda d with lambda > 0, the one found from the
+// affine fit rate(d) = a + B d (three solves, along e1, -e1, e2): d = (lambda I - B)^-1 a with
+// |d| = 1, lambda by bisection on [0, |a| + |B|] (beyond it |d| < 1), refined by secant steps on
+// the angle (the normal forces depend on d a little) until `settle`. Nullopt if a solve fails,
+// if the fit has no such lambda (nothing grows along any direction: `holds`) - unless settling
+// by the rate, where the fit, only near affine, may miss one at the edge of the cone and the
+// secant starts from lambda = 0 - or if the refinement does not settle; `guess`, where the fit
+// gave one.
+template <class Rate>
+std::optional<Vec2> affine_growing_direction(Rate&& rate_along, const Settle& settle, bool* holds,
+                                             Vec2* guess_out = nullptr) {
   if (holds) *holds = false;
-  auto rate_along = [&](const Vec2& d) -> std::optional<Vec2> {
-    c.roll_dir = d;
-    const HeldSolution trial = solve_held(bodies, contacts);
-    if (trial.status != HeldStatus::kOk) return std::nullopt;
-    return plane_coords(c, trial.motion[i].dalpha_W);
-  };
   const std::optional<Vec2> r1 = rate_along(Vec2(1.0, 0.0));
   const std::optional<Vec2> r1m = rate_along(Vec2(-1.0, 0.0));
   const std::optional<Vec2> r2 = rate_along(Vec2(0.0, 1.0));
@@ -1029,32 +1035,40 @@ std::optional<Vec2> roll_start_direction(const std::vector<HeldBody>& bodies,
   auto along = [&](double lambda) -> Vec2 {
     return (lambda * Eigen::Matrix2d::Identity() - B).fullPivLu().solve(a);
   };
+  const bool by_rate = settle.rate > 0.0;
   double lo = 0.0, hi = a.norm() + B.norm();
-  if (!(along(lo).norm() > 1.0)) {
-    if (holds) *holds = true;  // no direction it grows along: the resistance holds it
+  if (along(lo).norm() > 1.0) {
+    if (!(along(hi).norm() < 1.0)) return std::nullopt;
+    for (int it = 0; it < 100 && hi - lo > 1e-15 * hi; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      (along(mid).norm() > 1.0 ? lo : hi) = mid;
+    }
+  } else if (by_rate) {
+    hi = 0.0;
+  } else {
+    if (holds) *holds = true;  // no direction it grows along
     return std::nullopt;
-  }
-  if (!(along(hi).norm() < 1.0)) return std::nullopt;
-  for (int it = 0; it < 100 && hi - lo > 1e-15 * hi; ++it) {
-    const double mid = 0.5 * (lo + hi);
-    (along(mid).norm() > 1.0 ? lo : hi) = mid;
   }
   const Vec2 guess = along(0.5 * (lo + hi)).normalized();
   if (!guess.allFinite()) return std::nullopt;
-  // The normal forces do depend on d a little (a ball rolling on a ball: its rolling couple
-  // turns it, and through the sticking friction moves it along the curved surface): the
-  // direction is refined from the affine guess by secant steps on the angle, on the sine of the
-  // angle from d to rate(d).
+  if (guess_out) *guess_out = guess;
   auto at = [](double theta) { return Vec2(std::cos(theta), std::sin(theta)); };
+  // The refinement's function: the rate across d, or the sine.
   auto across = [&](double theta) -> double {
     const std::optional<Vec2> rate = rate_along(at(theta));
     if (!rate || !(rate->norm() > 0.0)) return std::numeric_limits<double>::quiet_NaN();
-    return cross2(at(theta), *rate) / rate->norm();
+    return cross2(at(theta), *rate) / (by_rate ? 1.0 : rate->norm());
+  };
+  const double rate_tol = settle.rate * B.norm();
+  auto settled = [&](double f) {
+    return by_rate ? std::abs(f) <= rate_tol : std::abs(f) <= settle.sine;
   };
   double theta0 = std::atan2(guess.y(), guess.x());
   double f0 = across(theta0);
   double theta1 = theta0 + 1e-4, f1 = across(theta1);
-  for (int it = 0; it < 20 && std::isfinite(f0) && std::isfinite(f1) && std::abs(f1) > 1e-9; ++it) {
+  // (The secant steps on the sine go on to 1e-9, past what settles it.)
+  auto done = [&](double f) { return by_rate ? settled(f) : std::abs(f) <= 1e-9; };
+  for (int it = 0; it < 20 && std::isfinite(f0) && std::isfinite(f1) && !done(f1); ++it) {
     if (f1 == f0) break;
     const double next = theta1 - f1 * (theta1 - theta0) / (f1 - f0);
     theta0 = theta1;
@@ -1062,16 +1076,52 @@ std::optional<Vec2> roll_start_direction(const std::vector<HeldBody>& bodies,
     theta1 = next;
     f1 = across(theta1);
   }
-  if (std::isfinite(f1) && std::abs(f1) <= 1e-6) {
+  if (std::isfinite(f1) && settled(f1)) {
     const std::optional<Vec2> rate = rate_along(at(theta1));
     if (rate && rate->dot(at(theta1)) > 0.0) return at(theta1);
   }
+  return std::nullopt;
+}
+
+// The direction a contact whose rolling resistance cannot hold it starts to roll in: d with
+// its rolling acceleration rate(d) = lambda d, lambda > 0, rolling along d
+// (affine_growing_direction: the resistance's couple is linear in d). Nullopt if a solve fails, if
+// no such lambda exists (the resistance can hold it: `holds`), or if the rolling along d does not
+// grow along d. (Iterated d <- rate(d) / |rate(d)| the direction cycled: a ball on a ball in a
+// pile, 16 rounds without settling at each of 9,000 plans; the search of every direction the slips
+// use, unstable_stick_direction, took 367 solves a start.) Leaves contacts[i] rolling along the
+// direction tried last.
+std::optional<Vec2> roll_start_direction(const std::vector<HeldBody>& bodies,
+                                         std::vector<HeldContact>& contacts, std::size_t i,
+                                         bool* holds = nullptr) {
+  HeldContact& c = contacts[i];
+  auto rate_along = [&](const Vec2& d) -> std::optional<Vec2> {
+    c.roll_dir = d;
+    const HeldSolution trial = solve_held(bodies, contacts);
+    if (trial.status != HeldStatus::kOk) return std::nullopt;
+    return plane_coords(c, trial.motion[i].dalpha_W);
+  };
+  Vec2 guess = Vec2::Zero();
+  if (const std::optional<Vec2> d = affine_growing_direction(rate_along, Settle{}, holds, &guess)) {
+    return d;
+  }
+  if ((holds && *holds) || guess == Vec2::Zero()) return std::nullopt;
   // Where the secant steps wander off (far from affine), the root is bracketed over the circle
   // from the guess and bisected, as for a slip.
   return growing_direction(std::atan2(guess.y(), guess.x()), rate_along);
 }
 
 }  // namespace
+
+std::optional<Vec2> vanishing_slip_direction(const std::vector<HeldBody>& bodies,
+                                             std::vector<HeldContact>& contacts, std::size_t i) {
+  const Vec2 kept = contacts[i].slip_dir;
+  // Settled to within 1e-12 of the friction's own part of the slip rate (Settle).
+  const std::optional<Vec2> d =
+      affine_growing_direction(slip_rate_along(bodies, contacts, i), Settle{0.0, 1e-12}, nullptr);
+  contacts[i].slip_dir = d ? *d : kept;
+  return d;
+}
 
 HeldModes choose_held_modes(const std::vector<HeldBody>& bodies, std::vector<HeldContact>& contacts,
                             double still, double tolerance) {

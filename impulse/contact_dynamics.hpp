@@ -39,6 +39,7 @@
 // each other) is a status, never a throw.
 #include "core/types.hpp"
 
+#include <optional>
 #include <string_view>
 #include <vector>
 
@@ -236,6 +237,16 @@ struct HeldModes {
 };
 HeldModes choose_held_modes(const std::vector<HeldBody>& bodies, std::vector<HeldContact>& contacts,
                             double still, double tolerance);
+
+// The direction contact i slides in at this state while its slip is too small to follow (below
+// an integrated motion's slip floor): d with its slip rate lambda d, lambda > 0, under the others'
+// modes - the acceleration-level Coulomb law, as for a slip that starts from rest. A slip that
+// small turns towards d at a rate of order mu g / |slip| (DESIGN.md §4), a stiff mode no explicit
+// step follows; resisted along d it is taken as turned already. Nullopt, contacts[i] unchanged,
+// where there is no such d (the contact could stick) or the search does not settle; else
+// contacts[i].slip_dir = d.
+std::optional<Vec2> vanishing_slip_direction(const std::vector<HeldBody>& bodies,
+                                             std::vector<HeldContact>& contacts, std::size_t i);
 
 // Sets c.torsion_arm from its patch: mu times the mean distance of the patch from c under uniform
 // pressure (a disc of radius R about its centre: 2R/3; a segment about its middle: L/4), or the

@@ -821,3 +821,100 @@ TEST_CASE("held: contacts that start to spin from rest spin the way their torsio
   CHECK(spun > 50);
   CHECK(unsettled == 0);
 }
+
+TEST_CASE("held: a vanishing slip slides along the direction its slip accelerates in",
+          "[impulse][held]") {
+  // Euler's disk (a cylinder held at its lower rim, a curved contact) rolling without slip in a
+  // random state - tilt, angular velocity, friction - so that the rolling needs a friction force
+  // whose direction the precession turns: where that force lies beyond mu N, the contact slides
+  // from a slip of zero along d with its slip rate lambda d, lambda > 0 (the acceleration-level
+  // Coulomb law), and vanishing_slip_direction must find it; where it lies within, there is none.
+  // The oracle: the roots of the slip rate's component across d, scanned over 3,600 directions
+  // and bisected. The rim's anisotropy (the rolling and the sliding across the rim move the disk
+  // differently) makes d differ from the opposite of the friction sticking needs: counted, so
+  // that a shortcut along that direction fails here.
+  const double r = 0.0375, h = 0.005, m = 0.45;
+  const double I1 = m * (3 * r * r + 4 * h * h) / 12, I3 = m * r * r / 2;
+  Uniform uniform{2718u};
+  int slides = 0, sticks = 0, turned = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    const double alpha = uniform(3.0, 60.0) * kPi / 180.0, mu = uniform(0.05, 1.0);
+    const Vec3 axis(std::sin(alpha), 0, std::cos(alpha));
+    const Mat3 rot = Eigen::AngleAxisd(alpha, Vec3::UnitY()).toRotationMatrix();
+    HeldBody disk;
+    disk.mass = m;
+    disk.inertia_W = rot * Vec3(I1, I1, I3).asDiagonal() * rot.transpose();
+    disk.inv_inertia_W = disk.inertia_W.inverse();
+    disk.x_W = Vec3(0, 0, r * std::sin(alpha) + h * std::cos(alpha));
+    disk.w_W = Vec3(uniform(-4, 4), uniform(-4, 4), uniform(-40, 40));
+    const Vec3 c = disk.x_W - h * axis + r * Vec3(std::cos(alpha), 0, -std::sin(alpha));
+    disk.v_W = -disk.w_W.cross(c - disk.x_W);  // rolling: no slip at the rim point
+    disk.force_W = Vec3(0, 0, -kG * m);
+    HeldContact k = on_plane(0, c, Vec3::UnitZ(), Vec3::UnitX(), mu);
+    k.curved = true;
+    k.curvature_W = r / std::sin(alpha) * Vec3::UnitY() * Vec3::UnitY().transpose();
+    k.curved_size = r;
+    std::vector<HeldBody> bodies = {disk};
+    std::vector<HeldContact> contacts = {k};
+    REQUIRE(held_velocities(bodies, contacts)[0].slip_W.norm() < 1e-12);
+    const HeldSolution stuck = solve_held(bodies, contacts);
+    REQUIRE(stuck.status == HeldStatus::kOk);
+    if (!(stuck.forces[0].normal > 0.0)) continue;  // it would lift off: not this test's case
+    const double need = stuck.forces[0].friction.norm() / (mu * stuck.forces[0].normal);
+    // The oracle's roots.
+    contacts[0].sticks = false;
+    auto rate_along = [&](double theta) {
+      contacts[0].slip_dir = Vec2(std::cos(theta), std::sin(theta));
+      const HeldSolution s = solve_held(bodies, contacts);
+      REQUIRE(s.status == HeldStatus::kOk);
+      const Vec3 rate = s.motion[0].slip_rate_W;
+      return Vec2(rate.dot(contacts[0].t1_W), rate.dot(contacts[0].t2_W));
+    };
+    auto across = [&](double theta) {
+      const Vec2 rate = rate_along(theta);
+      return std::cos(theta) * rate.y() - std::sin(theta) * rate.x();
+    };
+    std::vector<double> roots;
+    constexpr int kScan = 3600;
+    for (int j = 0; j < kScan; ++j) {
+      double lo = 2 * kPi * j / kScan, hi = 2 * kPi * (j + 1) / kScan;
+      double f_lo = across(lo);
+      if ((f_lo < 0) == (across(hi) < 0)) continue;
+      for (int it = 0; it < 60; ++it) {
+        const double mid = 0.5 * (lo + hi), f_mid = across(mid);
+        if ((f_mid < 0) == (f_lo < 0)) {
+          lo = mid;
+          f_lo = f_mid;
+        } else {
+          hi = mid;
+        }
+      }
+      const double root = 0.5 * (lo + hi);
+      if (rate_along(root).dot(Vec2(std::cos(root), std::sin(root))) > 0.0) roots.push_back(root);
+    }
+    INFO("trial " << trial << " friction needed / (mu N) " << need);
+    contacts[0].slip_dir = Vec2::UnitX();
+    const std::optional<Vec2> d = vanishing_slip_direction(bodies, contacts, 0);
+    if (need < 1.0 - 1e-6) {
+      ++sticks;
+      CHECK(roots.empty());
+      CHECK(!d);
+      CHECK(contacts[0].slip_dir == Vec2::UnitX());  // unchanged
+      continue;
+    }
+    if (need <= 1.0 + 1e-6) continue;  // the edge: either answer is within the solves' rounding
+    ++slides;
+    REQUIRE(roots.size() == 1);
+    REQUIRE(d);
+    CHECK(contacts[0].slip_dir == *d);
+    const Vec2 root(std::cos(roots[0]), std::sin(roots[0]));
+    CHECK(std::abs(d->x() * root.y() - d->y() * root.x()) <= 1e-8);
+    CHECK(d->dot(root) > 0.0);
+    const Vec2 opposite = -stuck.forces[0].friction.normalized();
+    if (std::abs(d->x() * opposite.y() - d->y() * opposite.x()) > 1e-2) ++turned;
+  }
+  INFO("slides " << slides << " sticks " << sticks << " turned " << turned);
+  CHECK(slides > 50);
+  CHECK(sticks > 50);
+  CHECK(turned > 20);
+}

@@ -56,12 +56,12 @@ struct Expected {
 // The committed final-state hashes of the shipped scenes.
 const Expected kExpected[] = {
     {"ball_on_platter.json", 0x05f50177987f5e0bull},
-    {"balls_in_dish.json", 0xb0599439c6344c91ull},
+    {"balls_in_dish.json", 0x8e21c93e047223a7ull},
     {"block_on_ramp_accelerating.json", 0x7baccee39ea4ad1eull},
     {"block_on_ramp_decelerating.json", 0x8369ce1c7eaca70aull},
-    {"bowling.json", 0x0c60efe000d66936ull},
+    {"bowling.json", 0x80cbfd11b94dc5a2ull},
     {"chain_of_balls.json", 0x42e3fa46cddd6d8dull},
-    {"coins.json", 0xe5d47de15bc0a5faull},
+    {"coins.json", 0x1deb8abb64fe29a1ull},
     {"cylinder_rolling_slope.json", 0x4bc4bf6ecb23e51aull},
     {"eulers_disk.json", 0xaf30eba8493be1b7ull},
     {"pool_break.json", 0xe1c1d57e3de8b6ffull},
