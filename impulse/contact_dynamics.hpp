@@ -243,8 +243,8 @@ HeldModes choose_held_modes(const std::vector<HeldBody>& bodies, std::vector<Hel
 // modes - the acceleration-level Coulomb law, as for a slip that starts from rest. A slip that
 // small turns towards d at a rate of order mu g / |slip| (DESIGN.md §4), a stiff mode no explicit
 // step follows; resisted along d it is taken as turned already. Nullopt, contacts[i] unchanged,
-// where there is no such d (the contact could stick) or the search does not settle; else
-// contacts[i].slip_dir = d.
+// where the contact could stick (its sticking friction within the cone: the slip stops), where
+// there is no such d, or where the search does not settle; else contacts[i].slip_dir = d.
 std::optional<Vec2> vanishing_slip_direction(const std::vector<HeldBody>& bodies,
                                              std::vector<HeldContact>& contacts, std::size_t i);
 
