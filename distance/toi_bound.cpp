@@ -273,6 +273,10 @@ double vertex_bound_above_face(const BodyState& sa, const ShapeGeometry& ga, con
       const double U = dv.norm() + ma.w_bound * v.r + accel * horizon;
       const double A = -n.dot(da) + mb.w_bound * horizon * da.norm() + slacks + spin_a * v.r +
                        spin_b * (v.rho + U * horizon) + 2.0 * mb.w_bound * U;
+      // An unbounded motion (an infinite bound, or one that turns a product into NaN) bounds
+      // nothing: a vertex can be there now. (Passed on, the NaN was lost in std::min and the
+      // whole horizon came back.)
+      if (!std::isfinite(A) || !std::isfinite(v.b)) return 0.0;
       const double delta = v.h - d_target;
       const double t = delta <= 0.0 && v.b < 0.0 ? solve_return_to_gap(A, v.b, delta)
                                                  : solve_gap_closing(A, v.b, delta);

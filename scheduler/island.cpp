@@ -782,7 +782,7 @@ Problem build_problem(const Island& island, const World& world,
         const Vec2 before = plane_coords(c, (*slip_before)[i]);
         if (before.norm() > still) {
           c.slip_dir = before.normalized();
-        } else if (c.active) {
+        } else if (c.active && c.friction > 0.0) {
           vanishing.push_back(i);
         }
       }

@@ -237,9 +237,11 @@ double Simulation::Impl::held_face_bound(const PairSet::Pair& p, const BodyState
   const BodyId face_id = face_on_a ? p.a : p.b, vertex_id = face_on_a ? p.b : p.a;
   const BodyState& sf = face_on_a ? s1 : s2;
   const BodyState& sv = face_on_a ? s2 : s1;
+  // The face's body must be that one piece, all below the face's plane (a compound's other
+  // pieces need not be).
   const std::vector<ShapeGeometry::Piece>& pieces = pairs.geometry(face_id).pieces();
   const int piece = face_on_a ? dr.piece1 : dr.piece2;
-  if (piece < 0 || piece >= static_cast<int>(pieces.size())) return -1.0;
+  if (pieces.size() != 1 || piece != 0) return -1.0;
   // Each body's motion over the coming interval: its island's bounds, free flight's (gravity,
   // its angular-speed bound, and the torque-free bound on its angular acceleration), or none.
   auto motion = [&](BodyId id, const BodyState& s, const BodyState& other,

@@ -10,6 +10,7 @@
 #include <catch2/catch.hpp>
 
 #include <cstdio>
+#include <limits>
 #include <string>
 
 using namespace palpable;
@@ -650,4 +651,64 @@ TEST_CASE("a body's vertices above a moving body's face: the bound never oversho
       reached, overshoots);
   CHECK(overshoots == 0);
   CHECK(reached > 200);
+}
+
+TEST_CASE("a vertex sliding fast over a turning face (Coriolis) and unbounded motions",
+          "[distance][toi]") {
+  // A review's cases for vertex_bound_above_face. A tetrahedron's lowest vertex 1e-6 m above the
+  // top face of a coin turning at 1 rad/s about an axis in that face, sliding across it at 10 m/s:
+  // the turning of the face's normal meets the sliding vertex (2 w U, 20 m/s^2), and the gap
+  // closes mostly by it. The bound must not come after the first instant (sampled exactly: the
+  // face turns rigidly, the vertex translates) the vertex is within the target; without the
+  // 2 w_B U term the bound was 14 times too late. And an infinite bound on either motion bounds
+  // nothing (0), where a NaN once let the whole 1e-2 s horizon through.
+  const TestShape a = tetrahedron(), b = coin();
+  const ShapeGeometry::Piece& piece_b = b.geometry->pieces().front();
+  const ShapeGeometry::Piece& pa = a.geometry->pieces().front();
+  int top = -1;
+  for (int f = 0; f < piece_b.mesh->num_faces(); ++f) {
+    if ((piece_b.R_M * piece_b.mesh->face_normal(f)).z() > 0.999) top = f;
+  }
+  REQUIRE(top >= 0);
+  const double w = 1.0, U = 10.0, h0 = 1e-6, d_target = 0.5e-6;
+  BodyState sb;
+  sb.w_W = Vec3(w, 0, 0);
+  const Vec3 n0 = piece_b.R_M * piece_b.mesh->face_normal(top);
+  const double off0 = n0.dot(piece_b.p_M) + piece_b.mesh->face_offset(top);
+  BodyState sa;
+  sa.q_WM = Quat(Eigen::AngleAxisd(0.2, Vec3::UnitX()));
+  const Mat3 RA = sa.q_WM.toRotationMatrix();
+  int lowest = 0;
+  for (int k = 0; k < pa.mesh->num_vertices(); ++k) {
+    if ((RA * pa.mesh->vertex(k)).z() < (RA * pa.mesh->vertex(lowest)).z()) lowest = k;
+  }
+  sa.x_W = Vec3(0, 0, off0 + h0) - RA * (pa.p_M + pa.R_M * pa.mesh->vertex(lowest));
+  sa.v_W = Vec3(0, U, 0);
+  VertexMotion ma, mb;
+  mb.w_bound = w;
+  const double bound = vertex_bound_above_face(sa, *a.geometry, ma, sb, piece_b, top, mb, d_target);
+  REQUIRE(bound > 0.0);
+  double reached = -1.0;
+  const int steps = 200000;
+  const double horizon = std::min(0.01, 1.5 * bound);
+  for (int i = 1; i <= steps && reached < 0.0; ++i) {
+    const double t = horizon * i / steps;
+    const Mat3 RB = Eigen::AngleAxisd(w * t, Vec3::UnitX()).toRotationMatrix();
+    const Vec3 n = RB * n0;
+    const double off = n.dot(RB * piece_b.p_M) + piece_b.mesh->face_offset(top);
+    for (int k = 0; k < pa.mesh->num_vertices(); ++k) {
+      const Vec3 q = sa.x_W + sa.v_W * t + RA * (pa.p_M + pa.R_M * pa.mesh->vertex(k));
+      if (n.dot(q) - off <= d_target) reached = t;
+    }
+  }
+  REQUIRE(reached > 0.0);  // it is reached within 1.5 bounds: the bound is near, and not late
+  CHECK(bound <= reached);
+  const double inf = std::numeric_limits<double>::infinity();
+  VertexMotion spinning_a;  // A's angular acceleration unbounded
+  spinning_a.alpha_bound = inf;
+  CHECK(vertex_bound_above_face(sa, *a.geometry, spinning_a, sb, piece_b, top, mb, d_target) ==
+        0.0);
+  VertexMotion turning_b;  // B's angular speed unbounded
+  turning_b.w_bound = inf;
+  CHECK(vertex_bound_above_face(sa, *a.geometry, ma, sb, piece_b, top, turning_b, d_target) == 0.0);
 }

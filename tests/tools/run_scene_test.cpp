@@ -395,7 +395,7 @@ TEST_CASE("persistent model: Euler's disk sliding at its cone slides without cha
         (run.trace.samples[k + 1][1].v_W - run.trace.samples[k - 1][1].v_W) / dt;
     worst = std::max(worst, std::hypot(a.x(), a.y()) / (a.z() + 9.81));
   }
-  CHECK(rise <= 0.0);
+  CHECK(rise <= 1e-12);  // J: rounding only (of 0.108 J)
   CHECK(worst <= 0.3 * (1.0 + 2e-3));
   // At mu 10 the rolling never needs more than mu N before it lands at 19.5 s
   // (tools/euler-disk-oracle); a slip left below the floor by a plan (at 2.0 s) is one that stops.
@@ -415,7 +415,7 @@ TEST_CASE("persistent model: Euler's disk sliding at its cone slides without cha
     rise = std::max(rise, e - previous);
     previous = e;
   }
-  CHECK(rise <= 0.0);
+  CHECK(rise <= 1e-12);  // J: rounding only (of 0.108 J)
 }
 
 TEST_CASE("persistent model: a disk stood on its side and spun tips onto its rim, no storm",
