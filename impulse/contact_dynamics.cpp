@@ -1054,10 +1054,11 @@ std::optional<Vec2> affine_growing_direction(Rate&& rate_along, const Settle& se
   if (guess_out) *guess_out = guess;
   auto at = [](double theta) { return Vec2(std::cos(theta), std::sin(theta)); };
   // The refinement's function: the rate across d, or the sine.
+  std::optional<Vec2> last;  // the rate at the angle `across` was last asked at (theta1, below)
   auto across = [&](double theta) -> double {
-    const std::optional<Vec2> rate = rate_along(at(theta));
-    if (!rate || !(rate->norm() > 0.0)) return std::numeric_limits<double>::quiet_NaN();
-    return cross2(at(theta), *rate) / (by_rate ? 1.0 : rate->norm());
+    last = rate_along(at(theta));
+    if (!last || !(last->norm() > 0.0)) return std::numeric_limits<double>::quiet_NaN();
+    return cross2(at(theta), *last) / (by_rate ? 1.0 : last->norm());
   };
   const double rate_tol = settle.rate * B.norm();
   auto settled = [&](double f) {
@@ -1077,8 +1078,7 @@ std::optional<Vec2> affine_growing_direction(Rate&& rate_along, const Settle& se
     f1 = across(theta1);
   }
   if (std::isfinite(f1) && settled(f1)) {
-    const std::optional<Vec2> rate = rate_along(at(theta1));
-    if (rate && rate->dot(at(theta1)) > 0.0) return at(theta1);
+    if (last->dot(at(theta1)) > 0.0) return at(theta1);
   }
   return std::nullopt;
 }

@@ -56,6 +56,33 @@ HeldContact on_plane(int mover, const Vec3& c, const Vec3& n, const Vec3& t1, do
   return k;
 }
 
+// A cylinder (radius r, half-height h, mass m) tilted alpha about y, held at its lower rim's
+// lowest point on the plane z = 0 (a curved contact, the rim's tangent its only curvature, r / sin
+// alpha; friction mu), under gravity and at rest: the caller sets its velocities.
+struct DiskOnRim {
+  HeldBody disk;
+  HeldContact rim;
+  Vec3 axis;
+};
+DiskOnRim disk_on_rim(double r, double h, double m, double alpha, double mu) {
+  DiskOnRim out;
+  out.axis = Vec3(std::sin(alpha), 0, std::cos(alpha));
+  const Mat3 rot = Eigen::AngleAxisd(alpha, Vec3::UnitY()).toRotationMatrix();
+  const double I1 = m * (3 * r * r + 4 * h * h) / 12, I3 = m * r * r / 2;
+  HeldBody& disk = out.disk;
+  disk.mass = m;
+  disk.inertia_W = rot * Vec3(I1, I1, I3).asDiagonal() * rot.transpose();
+  disk.inv_inertia_W = disk.inertia_W.inverse();
+  disk.x_W = Vec3(0, 0, r * std::sin(alpha) + h * std::cos(alpha));
+  disk.force_W = Vec3(0, 0, -kG * m);
+  const Vec3 c = disk.x_W - h * out.axis + r * Vec3(std::cos(alpha), 0, -std::sin(alpha));
+  out.rim = on_plane(0, c, Vec3::UnitZ(), Vec3::UnitX(), mu);
+  out.rim.curved = true;
+  out.rim.curvature_W = r / std::sin(alpha) * Vec3::UnitY() * Vec3::UnitY().transpose();
+  out.rim.curved_size = r;
+  return out;
+}
+
 // A square face of half-size h on the contact plane, about c.
 void square_patch(HeldContact& k, double h) {
   k.patch = PatchKind::kPolygon;
@@ -493,24 +520,12 @@ TEST_CASE("held: Euler's disk rolling on its rim at its steady motion keeps it",
     const double Omega = std::sqrt(
         kG * D / (std::sin(alpha) * (r * D / 2 - (r * r / 4 - h * h / 3) * std::cos(alpha))));
     const double spin = -Omega * D / r;
-    const Vec3 axis(std::sin(alpha), 0, std::cos(alpha));
-    const Mat3 rot = Eigen::AngleAxisd(alpha, Vec3::UnitY()).toRotationMatrix();
-    const double I1 = m * (3 * r * r + 4 * h * h) / 12, I3 = m * r * r / 2;
-    HeldBody disk;
-    disk.mass = m;
-    disk.inertia_W = rot * Vec3(I1, I1, I3).asDiagonal() * rot.transpose();
-    disk.inv_inertia_W = disk.inertia_W.inverse();
-    disk.x_W = Vec3(0, 0, r * std::sin(alpha) + h * std::cos(alpha));
-    disk.w_W = spin * axis + Vec3(0, 0, Omega);
-    disk.force_W = Vec3(0, 0, -kG * m);
-    const Vec3 c = disk.x_W - h * axis + r * Vec3(std::cos(alpha), 0, -std::sin(alpha));
-    REQUIRE(std::abs(c.z()) < 1e-16);
-    HeldContact k = on_plane(0, c, Vec3::UnitZ(), Vec3::UnitX(), 0.3);
-    k.curved = true;
-    k.curvature_W = r / std::sin(alpha) * Vec3::UnitY() * Vec3::UnitY().transpose();
-    k.curved_size = r;
+    DiskOnRim held = disk_on_rim(r, h, m, alpha, 0.3);
+    HeldBody& disk = held.disk;
+    disk.w_W = spin * held.axis + Vec3(0, 0, Omega);
+    REQUIRE(std::abs(held.rim.c_W.z()) < 1e-16);
     std::vector<HeldBody> bodies = {disk};
-    std::vector<HeldContact> contacts = {k};
+    std::vector<HeldContact> contacts = {held.rim};
     REQUIRE(held_velocities(bodies, contacts)[0].slip_W.norm() < 1e-15);
     const HeldModes modes = choose_held_modes(bodies, contacts, 1e-12, 1e-12);
     REQUIRE(modes.solution.status == HeldStatus::kOk);
@@ -834,28 +849,16 @@ TEST_CASE("held: a vanishing slip slides along the direction its slip accelerate
   // differently) makes d differ from the opposite of the friction sticking needs: counted, so
   // that a shortcut along that direction fails here.
   const double r = 0.0375, h = 0.005, m = 0.45;
-  const double I1 = m * (3 * r * r + 4 * h * h) / 12, I3 = m * r * r / 2;
   Uniform uniform{2718u};
   int slides = 0, sticks = 0, turned = 0;
   for (int trial = 0; trial < 300; ++trial) {
     const double alpha = uniform(3.0, 60.0) * kPi / 180.0, mu = uniform(0.05, 1.0);
-    const Vec3 axis(std::sin(alpha), 0, std::cos(alpha));
-    const Mat3 rot = Eigen::AngleAxisd(alpha, Vec3::UnitY()).toRotationMatrix();
-    HeldBody disk;
-    disk.mass = m;
-    disk.inertia_W = rot * Vec3(I1, I1, I3).asDiagonal() * rot.transpose();
-    disk.inv_inertia_W = disk.inertia_W.inverse();
-    disk.x_W = Vec3(0, 0, r * std::sin(alpha) + h * std::cos(alpha));
+    DiskOnRim held = disk_on_rim(r, h, m, alpha, mu);
+    HeldBody& disk = held.disk;
     disk.w_W = Vec3(uniform(-4, 4), uniform(-4, 4), uniform(-40, 40));
-    const Vec3 c = disk.x_W - h * axis + r * Vec3(std::cos(alpha), 0, -std::sin(alpha));
-    disk.v_W = -disk.w_W.cross(c - disk.x_W);  // rolling: no slip at the rim point
-    disk.force_W = Vec3(0, 0, -kG * m);
-    HeldContact k = on_plane(0, c, Vec3::UnitZ(), Vec3::UnitX(), mu);
-    k.curved = true;
-    k.curvature_W = r / std::sin(alpha) * Vec3::UnitY() * Vec3::UnitY().transpose();
-    k.curved_size = r;
+    disk.v_W = -disk.w_W.cross(held.rim.c_W - disk.x_W);  // rolling: no slip at the rim point
     std::vector<HeldBody> bodies = {disk};
-    std::vector<HeldContact> contacts = {k};
+    std::vector<HeldContact> contacts = {held.rim};
     REQUIRE(held_velocities(bodies, contacts)[0].slip_W.norm() < 1e-12);
     const HeldSolution stuck = solve_held(bodies, contacts);
     REQUIRE(stuck.status == HeldStatus::kOk);

@@ -7,6 +7,11 @@
 # the oracle's own step error 5e-8), and the simulator's first slip event within two oracle steps
 # of the instant the rolling first needs more than mu N (5.0761 s; 3.0798 s), none in the steady
 # motion. (At the scene's own tolerance 1e-9 the three measure 6.4e-5, 5.1e-4 and 1.3e-4.)
+# From the rolling-resistance run's first slip to 5.6 s, against tools/euler-disk-oracle --slide
+# (the rim sliding under Coulomb friction regularised in the slip's direction at eps 1e-5 m/s):
+# Omega and c within 1 % of their size at every sample (measured: c within 0.5 %, 3.4e-6 m of
+# 6.6e-4; Omega within 0.24 %, 0.16 of 67 rad/s); that check must fail with the oracle's mu 1 %
+# off (0.303: c 2 % off, 1.4e-5 m).
 # A missing or malformed trace is bad input: exit 2, the file named.
 # Usage: euler_disk_oracle_test.sh PALPABLE PYTHON SOURCE_DIR
 set -uo pipefail
@@ -33,8 +38,31 @@ check() {  # name, end, then palpable --set values (the oracle reads them from t
   fi
 }
 check steady_20deg 2
-check rolling_resistance 5.2 /materials/default/rolling_resistance=1e-4
+check rolling_resistance 5.6 /materials/default/rolling_resistance=1e-4
 check spinning_resistance 3.2 /materials/default/spinning_resistance=1e-4
+slide() {  # extra oracle options; the oracle's exit code
+  "$python" "$oracle" "$work/rolling_resistance.csv" --slide \
+    --events "$work/rolling_resistance.events.csv" --end 5.6 --eps 1e-5 --dt 2.2e-6 \
+    --check 0.01 "$@" >"$work/out" 2>&1
+}
+if [ -f "$work/rolling_resistance.csv" ]; then
+  if slide; then
+    echo "ok   sliding"
+  else
+    echo "FAIL sliding"
+    cat "$work/out"
+    fail=1
+  fi
+  slide --mu 0.303
+  code=$?
+  if [ "$code" -eq 1 ]; then
+    echo "ok   sliding_mu_1_percent_off_fails"
+  else
+    echo "FAIL sliding_mu_1_percent_off_fails: exit $code"
+    cat "$work/out"
+    fail=1
+  fi
+fi
 bad_input() {  # name, trace file
   "$python" "$oracle" "$2" >/dev/null 2>"$work/err"
   local code=$?
