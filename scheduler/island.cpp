@@ -1886,11 +1886,15 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
       out.push_back({c.sticks ? IslandEvent::Kind::kSlipStart : IslandEvent::Kind::kSlipStop, li,
                      kInfinity, c.sticks ? slip_tol : 0.0});
       out.push_back({IslandEvent::Kind::kSlipStop, li, kInfinity, 0.0});
+      // So too a sticking torsion's and rolling resistance's (the choice measures their excess
+      // in newtons, over the torsion arm and the resistance).
+      const double spin_tol = std::max(ftol * size, 2e-9 * largest_normal * c.torsion_arm);
+      const double roll_tol = std::max(ftol * size, 2e-9 * largest_normal * c.rolling_resistance);
       out.push_back({c.spin_sticks ? IslandEvent::Kind::kSlipStart : IslandEvent::Kind::kSpinStop,
-                     li, kInfinity, c.spin_sticks ? ftol * size : 0.0});
+                     li, kInfinity, c.spin_sticks ? spin_tol : 0.0});
       out.push_back({IslandEvent::Kind::kSpinStop, li, kInfinity, 0.0});
       out.push_back({c.roll_sticks ? IslandEvent::Kind::kSlipStart : IslandEvent::Kind::kRollStop,
-                     li, kInfinity, c.roll_sticks ? ftol * size : 0.0});
+                     li, kInfinity, c.roll_sticks ? roll_tol : 0.0});
       out.push_back({IslandEvent::Kind::kRollStop, li, kInfinity, 0.0});
       out.push_back({IslandEvent::Kind::kLanding, li, kInfinity, 1e-12 * size});
       EventValue* e = &out[block];
