@@ -1875,7 +1875,13 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
     for (const HeldContactForces& f : s.forces) {
       largest_normal = std::max(largest_normal, std::abs(f.normal));
     }
-    const double slip_tol = std::max(ftol, 2e-9 * largest_normal);
+    // So too a sticking torsion's and rolling resistance's: the choice measures their excess in
+    // newtons over the torsion arm and the resistance, their events in newton metres (the floor:
+    // the island's weight over its size). One rule: past the floor, and past twice the choice's
+    // tolerance times the arm (1 for friction).
+    auto start_tolerance = [&](double floor_length, double arm) {
+      return std::max(ftol * floor_length, 2e-9 * largest_normal * arm);
+    };
     for (std::size_t i = 0; i < links.size(); ++i) {
       const HeldContact& c = p.contacts[i];
       const HeldLink& link = links[i];
@@ -1884,17 +1890,14 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
       out.push_back({IslandEvent::Kind::kLiftOff, li, kInfinity, ftol});
       out.push_back({IslandEvent::Kind::kTip, li, kInfinity, 1e-12 * size});
       out.push_back({c.sticks ? IslandEvent::Kind::kSlipStart : IslandEvent::Kind::kSlipStop, li,
-                     kInfinity, c.sticks ? slip_tol : 0.0});
+                     kInfinity, c.sticks ? start_tolerance(1.0, 1.0) : 0.0});
       out.push_back({IslandEvent::Kind::kSlipStop, li, kInfinity, 0.0});
-      // So too a sticking torsion's and rolling resistance's (the choice measures their excess
-      // in newtons, over the torsion arm and the resistance).
-      const double spin_tol = std::max(ftol * size, 2e-9 * largest_normal * c.torsion_arm);
-      const double roll_tol = std::max(ftol * size, 2e-9 * largest_normal * c.rolling_resistance);
       out.push_back({c.spin_sticks ? IslandEvent::Kind::kSlipStart : IslandEvent::Kind::kSpinStop,
-                     li, kInfinity, c.spin_sticks ? spin_tol : 0.0});
+                     li, kInfinity, c.spin_sticks ? start_tolerance(size, c.torsion_arm) : 0.0});
       out.push_back({IslandEvent::Kind::kSpinStop, li, kInfinity, 0.0});
       out.push_back({c.roll_sticks ? IslandEvent::Kind::kSlipStart : IslandEvent::Kind::kRollStop,
-                     li, kInfinity, c.roll_sticks ? roll_tol : 0.0});
+                     li, kInfinity,
+                     c.roll_sticks ? start_tolerance(size, c.rolling_resistance) : 0.0});
       out.push_back({IslandEvent::Kind::kRollStop, li, kInfinity, 0.0});
       out.push_back({IslandEvent::Kind::kLanding, li, kInfinity, 1e-12 * size});
       EventValue* e = &out[block];
