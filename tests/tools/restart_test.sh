@@ -2,8 +2,8 @@
 # tools/stacks/restart.py as a user runs it: a scene restarted from a trace sample starts exactly
 # at that sample (every dynamic body's position, orientation, velocity and angular velocity in the
 # restarted run's first sample equal the original's at T, to the last digit), runs, and bad input
-# (no sample at T, a missing trace, a body missing from the sample) exits 2 naming the file and
-# leaves no output file behind.
+# (no sample at T, a missing trace, a file that is not a trace, a body missing from the sample)
+# exits 2 naming the file and leaves no output file behind.
 # Usage: restart_test.sh PALPABLE PYTHON SOURCE_DIR
 set -uo pipefail
 palpable=$1
@@ -41,6 +41,8 @@ expect_bad() {  # expect_bad NAME WORD ARGS... : exit 2, stderr naming WORD, no 
 }
 expect_bad "no sample at T" "t.csv" "$scene" "$work/t.csv" 0.123
 expect_bad "missing trace" "nope.csv" "$scene" "$work/nope.csv" 0.1
+printf 'time,name\n0.1,ball0\n' > "$work/other.csv"
+expect_bad "not a trace" "other.csv: not a palpable trace: no column 't'" "$scene" "$work/other.csv" 0.1
 grep -v ",ball1," "$work/t.csv" > "$work/short.csv"
 expect_bad "body missing" "short.csv" "$scene" "$work/short.csv" 0.1
 exit $fail

@@ -57,7 +57,10 @@ def main():
             for row in csv.DictReader(f):
                 if abs(float(row["t"]) - args.t) <= 1e-9:
                     sample[row["body"]] = row
-    except (OSError, ValueError, KeyError, TypeError) as e:
+    except KeyError as e:
+        fail(f"{args.trace}: not a palpable trace: no column {e} (expected "
+             "t,body,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz)")
+    except (OSError, ValueError, TypeError) as e:
         fail(f"{args.trace}: cannot read the trace: {e}")
     if not sample:
         fail(f"{args.trace}: no sample at t = {args.t:g} s")
