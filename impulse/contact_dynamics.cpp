@@ -331,6 +331,7 @@ class Assembly {
       const Vec3 alpha_m = k.m.body >= 0 ? Vec3(am.tail<3>()) : k.m.alpha;
       const Vec3 alpha_s = k.s.body >= 0 ? Vec3(as.tail<3>()) : k.s.alpha;
       mo.dalpha_W = alpha_m - alpha_s;
+      mo.roll_rate_W = mo.dalpha_W - k.dw.dot(c.n_W) * k.n_dot;
       if (!c.active) continue;
       HeldContactForces& f = out.forces[i];
       const Layout& l = layout_[i];
@@ -893,7 +894,7 @@ int turned_start(const std::vector<HeldContact>& contacts, const HeldSolution& s
     const HeldContact& c = contacts[static_cast<std::size_t>(i)];
     if (!c.active || (rolling ? c.roll_sticks : c.sticks)) continue;
     const HeldContactMotion& m = solution.motion[static_cast<std::size_t>(i)];
-    const Vec2 rate = rolling ? plane_coords(c, m.dalpha_W) : plane_coords(c, m.slip_rate_W);
+    const Vec2 rate = rolling ? plane_coords(c, m.roll_rate_W) : plane_coords(c, m.slip_rate_W);
     const Vec2& dir = rolling ? c.roll_dir : c.slip_dir;
     const double scale = rolling ? point_size(c) : 1.0;
     if (!(rate.norm() * scale > tolerance * acceleration_scale)) continue;
@@ -1099,7 +1100,7 @@ std::optional<Vec2> roll_start_direction(const std::vector<HeldBody>& bodies,
     c.roll_dir = d;
     const HeldSolution trial = solve_held(bodies, contacts);
     if (trial.status != HeldStatus::kOk) return std::nullopt;
-    return plane_coords(c, trial.motion[i].dalpha_W);
+    return plane_coords(c, trial.motion[i].roll_rate_W);
   };
   Vec2 guess = Vec2::Zero();
   if (const std::optional<Vec2> d = affine_growing_direction(rate_along, Settle{}, holds, &guess)) {
@@ -1259,7 +1260,8 @@ HeldModes choose_held_modes(const std::vector<HeldBody>& bodies, std::vector<Hel
           const HeldContact& c = contacts[static_cast<std::size_t>(turned_roll)];
           roll_from_rest(
               turned_roll,
-              plane_coords(c, out.solution.motion[static_cast<std::size_t>(turned_roll)].dalpha_W)
+              plane_coords(c,
+                           out.solution.motion[static_cast<std::size_t>(turned_roll)].roll_rate_W)
                   .normalized(),
               /*turned=*/true);
         }

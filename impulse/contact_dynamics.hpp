@@ -158,6 +158,10 @@ struct HeldContactMotion {
   Vec3 slip_rate_W = Vec3::Zero();  // ds/dt, following the contact point
   Vec3 dw_W = Vec3::Zero();         // relative angular velocity
   Vec3 dalpha_W = Vec3::Zero();     // relative angular acceleration
+  // d/dt of the rolling, dw's part in the tangent plane, as the normal turns: dalpha - (dw . n)
+  // dn/dt (its part in that plane). Where the normal turns (a ball on a ball), the spin about it
+  // turns into rolling: not dalpha's part alone.
+  Vec3 roll_rate_W = Vec3::Zero();
 };
 
 enum class HeldStatus : std::uint8_t {

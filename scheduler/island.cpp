@@ -1078,7 +1078,7 @@ void stop_imminent(const std::vector<HeldBody>& bodies, std::vector<HeldContact>
     if (slides(c, 1) && soon(Vec2(m.dw_W.dot(c.n_W), 0.0), Vec2(m.dalpha_W.dot(c.n_W), 0.0))) {
       c.spin_stopped = true;
     }
-    if (slides(c, 2) && soon(plane_coords(c, m.dw_W), plane_coords(c, m.dalpha_W))) {
+    if (slides(c, 2) && soon(plane_coords(c, m.dw_W), plane_coords(c, m.roll_rate_W))) {
       c.roll_stopped = true;
     }
   }
@@ -1646,7 +1646,7 @@ void Island::classify(const World& world, const std::vector<const ShapeGeometry*
       uniform = uniform && parallel(plane_coords(c, m.slip_rate_W), c.slip_dir);
     }
     if (!c.roll_sticks && c.rolling_resistance > 0.0) {
-      uniform = uniform && parallel(plane_coords(c, m.dalpha_W), c.roll_dir);
+      uniform = uniform && parallel(plane_coords(c, m.roll_rate_W), c.roll_dir);
     }
   }
   if (uniform) {
@@ -1718,7 +1718,7 @@ void Island::find_uniform_event(const World& world, const std::vector<HeldContac
     }
     if (!c.roll_sticks && c.rolling_resistance > 0.0) {
       const double s = plane_coords(c, m.dw_W).dot(c.roll_dir);
-      const double rate = plane_coords(c, m.dalpha_W).dot(c.roll_dir);
+      const double rate = plane_coords(c, m.roll_rate_W).dot(c.roll_dir);
       if (rate < 0.0) consider(s / -rate, IslandEvent::Kind::kRollStop, i);
     }
     // The centre of pressure (fixed on the mover, which does not turn; a sphere's contact point
@@ -2163,7 +2163,7 @@ void Island::integrate(const World& world, const std::vector<const ShapeGeometry
     switch (kind) {
       case 0: return plane_coords(c, m.slip_W).dot(plane_coords(c, m.slip_rate_W));
       case 1: return m.dw_W.dot(c.n_W) * m.dalpha_W.dot(c.n_W);
-      default: return plane_coords(c, m.dw_W).dot(plane_coords(c, m.dalpha_W));
+      default: return plane_coords(c, m.dw_W).dot(plane_coords(c, m.roll_rate_W));
     }
   };
   auto clock_rate = [&](const Solved& sol) {
