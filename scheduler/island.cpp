@@ -1521,20 +1521,17 @@ void Island::classify(const World& world, const std::vector<const ShapeGeometry*
   t_end = kInfinity;
   event = IslandEvent{};
 
-  // In place: on fixed supports, no centre moving or accelerated (equilibrium holds for the
-  // forces). At rest: nothing turning either.
-  bool in_place = true;
-  for (std::size_t i = 0; i < links.size() && in_place; ++i) {
+  // At rest: still bodies on fixed supports, not accelerated (equilibrium holds).
+  bool rest = true;
+  for (std::size_t i = 0; i < links.size() && rest; ++i) {
     const HeldContact& c = contacts[i];
-    in_place = (c.mover >= 0 || fixed_side(world, c.mover, links[i].mover)) &&
-               (c.support >= 0 || fixed_side(world, c.support, links[i].support));
+    rest = (c.mover >= 0 || fixed_side(world, c.mover, links[i].mover)) &&
+           (c.support >= 0 || fixed_side(world, c.support, links[i].support));
   }
-  for (std::size_t k = 0; k < nb && in_place; ++k) {
-    in_place = anchor_[k].v_W.norm() <= still && sol.a_W[k].norm() <= a_floor;
-  }
-  bool rest = in_place;
   for (std::size_t k = 0; k < nb && rest; ++k) {
-    rest = anchor_[k].w_W.norm() * reach[k] <= still && sol.alpha_W[k].norm() * reach[k] <= a_floor;
+    const BodyState& s = anchor_[k];
+    rest = s.v_W.norm() <= still && s.w_W.norm() * reach[k] <= still &&
+           sol.a_W[k].norm() <= a_floor && sol.alpha_W[k].norm() * reach[k] <= a_floor;
   }
   if (rest) {
     motion = Motion::kRest;
@@ -1656,14 +1653,6 @@ void Island::classify(const World& world, const std::vector<const ShapeGeometry*
     motion = Motion::kUniform;
     for (std::size_t k = 0; k < nb; ++k) {
       a_[k] = sol.a_W[k];
-      if (in_place) {
-        // Spheres spinning in place (about their contacts' normals, where nothing resists a
-        // spin): their centres stand still, as at rest, not drifting at the projection's
-        // rounding. (Drifting at 1e-15 m/s, balls spinning in a pile that had come to rest
-        // were met by their neighbours' pair checks seconds later, and held again.)
-        anchor_[k].v_W.setZero();
-        a_[k].setZero();
-      }
       if (sphere[k]) {
         alpha_[k] = sol.alpha_W[k];
         turning_[k] = anchor_[k].w_W.cross(alpha_[k]).norm() >

@@ -210,37 +210,6 @@ TEST_CASE(
   }
 }
 
-TEST_CASE(
-    "persistent model: a ball spinning in place on the floor stays exactly in place, at no "
-    "cost",
-    "[tools][run]") {
-  // Nothing resists a spin about the contact's normal: the ball spins on for ever, its centre
-  // still. Its centre's rounding-sized velocity (1e-15 m/s here, as the projection leaves it in
-  // a pile) is not carried on: in a pile of 100 balls come to rest, balls spinning so drifted at
-  // 1e-15 m/s, their boxes were refreshed every 0.25 s (1,080 times in 5 s), and their
-  // neighbours' pair checks met and held them seconds after the pile had come to rest.
-  const double r = 0.05;
-  json bodies = json::array({floor_body()});
-  bodies.push_back({{"name", "ball"},
-                    {"mass", 0.1},
-                    {"shape", {{"type", "sphere"}, {"radius", r}}},
-                    {"position", {0.0, 0.0, r}},
-                    {"velocity", {1e-15, -2e-15, 0.0}},
-                    {"angular_velocity", {0.0, 0.0, 3.0}}});
-  const SceneFile file("spinning_in_place", scene_of(bodies, 10.0));
-  RunOptions options;
-  options.scene_path = file.path;
-  options.overrides = {"/settings/contact_model=persistent"};
-  const RunResult r_run = run_scene(options);
-  CHECK(r_run.stats.horizon_refreshes == 0);
-  REQUIRE(r_run.trace.samples.size() >= 1000);
-  const auto& first = r_run.trace.samples.front();
-  for (const auto& sample : r_run.trace.samples) {
-    CHECK(sample[1].x_W == first[1].x_W);
-    CHECK(sample[1].w_W.z() == 3.0);
-  }
-}
-
 TEST_CASE("persistent model: pyramids started 0.2 mm apart land, rest and do not drift sideways",
           "[tools][run]") {
   // Issue 14's figure for stacks started apart: the physics has no horizontal motion (every
