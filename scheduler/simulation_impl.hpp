@@ -229,6 +229,10 @@ struct Simulation::Impl {
   // it does not apply.
   std::optional<CollisionRecord> part_free_pair(const PairSet::Pair& p, const Contact& c,
                                                 const DistanceResult& contact, double t);
+  // Holds pair `index`, touching a body held at this instant and neither approaching nor
+  // parting, with that body's pending plan. Returns whether it did.
+  bool join_pending_plan(std::uint32_t index, const Contact& c, const DistanceResult& contact,
+                         double t);
   // A pair's event: collide if within the envelope and approaching — an impact at the instant
   // its gap closes —, else re-bound. Returns the collision, if any.
   std::optional<CollisionRecord> check_pair(std::uint32_t index, double t);
