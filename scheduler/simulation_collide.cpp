@@ -14,9 +14,9 @@ namespace palpable {
 
 namespace {
 
-// The least cosine between gravity and a touching pair's normal at which gravity carries one
-// body into the other (join_pending_plan); below it the component is rounding's (a ball beside
-// a wall, turned about the vertical: ~1e-17).
+// The least part of gravity's magnitude pressing a touching pair along its normal at which it
+// loads the pair (join_pending_plan); below it the part is rounding's (a ball beside a wall,
+// turned about the vertical: ~1e-17).
 constexpr double kTouchingCosine = 1e-9;
 
 }  // namespace
@@ -207,13 +207,12 @@ bool Simulation::Impl::join_pending_plan(std::uint32_t index, const Contact& c,
       !(c.u_n <= rounding_speed(c))) {
     return false;
   }
-  // Gravity along the normal (from b to a); a body in free flight must be the one it carries
-  // into the other.
-  const Vec3 g = world.gravity_W;
-  const double along = g.dot(c.n_W);
-  if (!(std::abs(along) > kTouchingCosine * g.norm())) return false;
-  if (in_free_flight(p.a) && !(along < 0.0)) return false;
-  if (in_free_flight(p.b) && !(along > 0.0)) return false;
+  // What presses the pair together along its normal: the contact's own g_n (a body held at this
+  // instant counts as held still: ContactSide), and between two such bodies the upper one's
+  // weight along n (DESIGN.md §4), as between two bodies in free flight.
+  const double pressed =
+      pending(p.a) && pending(p.b) ? std::abs(world.gravity_W.dot(c.n_W)) : c.g_n;
+  if (!(pressed > kTouchingCosine * world.gravity_W.norm())) return false;
   const std::optional<HeldLink> link = link_of(index, contact);
   if (!link) return false;
   hold(index, *link, contact, t, /*struck=*/false);
