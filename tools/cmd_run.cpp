@@ -47,9 +47,14 @@ palpable::tools::CommandRegistration registration{
           app.add_option("--end", *end, "End time [s], replacing the scene's end_time");
       app.add_option("--summary-json", options->summary_path,
                      "Write the summary (statistics, wall time, reference figures) as JSON");
-      return std::function<int()>([options, end, end_option] {
+      auto progress = std::make_shared<bool>(false);
+      app.add_flag("--progress", *progress,
+                   "Report the simulated time reached on stderr even when it is not a terminal\n"
+                   "(by default only on a terminal): at most 4 times a second, after the first\n"
+                   "second of wall time, each report starting with a carriage return.");
+      return std::function<int()>([options, end, end_option, progress] {
         if (end_option->count() > 0) options->end_time = *end;
-        options->progress = ::isatty(2) != 0;
+        options->progress = *progress || ::isatty(2) != 0;
         options->keep_trace = false;  // memory flat in simulated time: stream, keep no history
         std::vector<std::pair<std::string, std::string>> outputs = {
             {"--trace", options->trace_path},
