@@ -17,7 +17,7 @@ namespace {
 // The least part of gravity's magnitude pressing a touching pair along its normal at which it
 // loads the pair (join_pending_plan); below it the part is rounding's (a ball beside a wall,
 // turned about the vertical: ~1e-17).
-constexpr double kTouchingCosine = 1e-9;
+constexpr double kLeastPressOfGravity = 1e-9;
 
 }  // namespace
 
@@ -212,7 +212,7 @@ bool Simulation::Impl::join_pending_plan(std::uint32_t index, const Contact& c,
   // weight along n (DESIGN.md §4), as between two bodies in free flight.
   const double pressed =
       pending(p.a) && pending(p.b) ? std::abs(world.gravity_W.dot(c.n_W)) : c.g_n;
-  if (!(pressed > kTouchingCosine * world.gravity_W.norm())) return false;
+  if (!(pressed > kLeastPressOfGravity * world.gravity_W.norm())) return false;
   const std::optional<HeldLink> link = link_of(index, contact);
   if (!link) return false;
   hold(index, *link, contact, t, /*struck=*/false);

@@ -282,12 +282,21 @@ RunResult run_scene(const RunOptions& options) {
                 << 100.0 * t / scene.end_time << " %)" << std::defaultfloat << std::flush;
     };
   }
-  try {
-    simulation.run_until(scene.end_time, &observer, progress);
-  } catch (const InputError& e) {
-    throw in_scene(e);
+  {
+    // The progress line is cleared however the run ends, so that what follows on stderr (the
+    // summary, or an error thrown mid-run) starts at the beginning of a line.
+    struct ClearProgress {
+      const bool& reported;
+      ~ClearProgress() {
+        if (reported) std::cerr << "\r" << std::string(60, ' ') << "\r" << std::flush;
+      }
+    } clear_progress{reported};
+    try {
+      simulation.run_until(scene.end_time, &observer, progress);
+    } catch (const InputError& e) {
+      throw in_scene(e);
+    }
   }
-  if (reported) std::cerr << "\r" << std::string(60, ' ') << "\r" << std::flush;
   result.cpu_time_s = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
   result.wall_time_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
