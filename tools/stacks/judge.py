@@ -11,7 +11,11 @@ Figures, over every dynamic body:
   turn              largest rotation angle from the starting orientation [rad]
   rest_at           the last sample at which any body was farther than the rest tolerance
                     from its final position [s] (0: never moved)
-  events_after_rest events (--events) after rest_at
+  still_from        the sample after rest_at: from it on every body is at its final position
+                    at every sample [s] (the first sample if nothing moved)
+  events_settling   events (--events) after rest_at and before still_from: the motion ended
+                    somewhere in that sampling interval, so these belong to the settling
+  events_after_rest events (--events) at or after still_from: while everything was still
   at_rest           true when rest_at is at least 0.5 s before the trace's end
 Exit code: 0 at rest, 1 still moving at the end, 2 unreadable input.
 """
@@ -59,18 +63,24 @@ def main():
                 rest = max(rest, t)
                 break
     end = max(s[-1][0] for s in by_body.values())
-    after = sum(1 for e in events if float(e["t"]) > rest + 1e-9)
+    times = sorted({sample[0] for samples in by_body.values() for sample in samples})
+    still = next((t for t in times if t > rest), end) if rest > 0.0 else times[0]
+    event_times = [float(e["t"]) for e in events]
+    settling = sum(1 for t in event_times if rest < t < still)
+    after = sum(1 for t in event_times if t >= still)
     at_rest = rest <= end - 0.5
     figures = {"displacement_m": disp, "horizontal_m": horiz, "turn_rad": turn, "rest_at_s": rest,
+               "still_from_s": still,
+               "events_settling": settling if args.events else None,
                "events_after_rest": after if args.events else None, "at_rest": at_rest,
                "end_s": end, "bodies": len(by_body)}
     if args.json:
         print(json.dumps(figures))
     else:
         print("displacement %.3g m  horizontal %.3g m  turn %.3g rad  rest at %.2f s  "
-              "events after rest %s  %s" % (disp, horiz, turn, rest,
-                                            after if args.events else "-",
-                                            "AT REST" if at_rest else "MOVING"))
+              "events settling %s  events after rest %s  %s" %
+              (disp, horiz, turn, rest, settling if args.events else "-",
+               after if args.events else "-", "AT REST" if at_rest else "MOVING"))
     sys.exit(0 if at_rest else 1)
 
 
