@@ -240,6 +240,53 @@ TEST_CASE("spheres and halfspaces: closed forms, touching, penetration depth",
   CHECK(sunk.penetration_depth == Approx(0.2));
 }
 
+TEST_CASE("polyhedra overlapping beyond rounding: the axis of least overlap, its depth",
+          "[distance][shapes]") {
+  // V-Clip's normal for an overlap is any direction at all. A held hull's edge drifted 3e-13 m
+  // into the face it was held on (a pile of 200 hulls); with V-Clip's normal the released pair
+  // seemed to part at 1.4 mm/s while along the face's normal it approached. The least-overlap
+  // axis is the normal, and its overlap the depth (an upper bound: a translation by it along
+  // the normal separates the bodies).
+  const TestShape box = cube();  // 1 m
+  PairCache cache;
+  for (const double depth : {3e-13, 1e-9, 1e-6, 1e-3}) {
+    CAPTURE(depth);
+    // A cube sunk flat into a cube, offset sideways and turned about the normal.
+    const Pose top{Vec3(0.3, -0.2, 1.0 - depth), Quat(Eigen::AngleAxisd(0.2, Vec3::UnitZ()))};
+    DistanceResult r = closest_features(*box.geometry, top, *box.geometry, Pose{}, cache, 100);
+    CHECK(r.status == ContactStatus::kPenetrating);
+    CHECK((r.n_W - Vec3::UnitZ()).norm() < 1e-12);  // from body 2 to body 1
+    CHECK(std::abs(r.penetration_depth - depth) <= 1e-15);
+    // A cube standing on an edge, sunk into a cube's top face.
+    const Pose edge{Vec3(0.1, 0.05, 0.5 + std::sqrt(0.5) - depth),
+                    Quat(Eigen::AngleAxisd(M_PI / 4, Vec3::UnitX()))};
+    r = closest_features(*box.geometry, Pose{}, *box.geometry, edge, cache, 100);
+    CHECK(r.status == ContactStatus::kPenetrating);
+    CHECK((r.n_W + Vec3::UnitZ()).norm() < 1e-12);
+    CHECK(std::abs(r.penetration_depth - depth) <= 1e-15);
+  }
+  // Random overlapping poses of two boxes of unequal sides: moving body 1 out along the normal
+  // by the depth (and a hair) separates the pair.
+  std::mt19937_64 rng(20261130);
+  const TestShape plate = make_test_shape("plate", ConvexPolyhedron::box(Vec3(0.4, 0.25, 0.05)));
+  int overlapping = 0;
+  for (int i = 0; i < 2000; ++i) {
+    const Pose p1 = random_pose(rng, 0.3), p2 = random_pose(rng, 0.3);
+    PairCache cold;
+    const DistanceResult r = closest_features(*plate.geometry, p1, *box.geometry, p2, cold, 10000);
+    if (r.status != ContactStatus::kPenetrating) continue;
+    ++overlapping;
+    INFO("case " << i);
+    REQUIRE(r.penetration_depth > 0.0);
+    const Pose out{p1.x_W + (r.penetration_depth * (1.0 + 1e-12) + 1e-14) * r.n_W, p1.q_WM};
+    PairCache again;
+    const DistanceResult moved =
+        closest_features(*plate.geometry, out, *box.geometry, p2, again, 10000);
+    CHECK(moved.status != ContactStatus::kPenetrating);
+  }
+  CHECK(overlapping > 500);
+}
+
 TEST_CASE("compounds pair piece by piece", "[distance][shapes]") {
   // A dish of two boxes; a ball above the right one.
   auto piece = [](const Vec3& half, const Vec3& at) {
