@@ -82,7 +82,13 @@ DistanceResult Simulation::Impl::query(PairSet::Pair& p, const BodyState& s1, co
                           Pose{s2.x_W, s2.q_WM}, p.cache, settings().distance_max_steps);
     stats.feature_steps += static_cast<std::uint64_t>(dr.steps);
   }
-  if (dr.status == ContactStatus::kPenetrating) ++stats.penetrations;
+  if (dr.status == ContactStatus::kPenetrating) {
+    ++stats.penetrations;
+    // NaN (unknown: polyhedra beyond the rounding check's budget) leaves it as it is.
+    if (dr.penetration_depth > stats.deepest_penetration_m) {
+      stats.deepest_penetration_m = dr.penetration_depth;
+    }
+  }
   // DESIGN.md §5 step 6: no penetration deeper than the envelope (a polyhedron pair's depth is
   // unknown here: any overlap of one fails).
   PALPABLE_DCHECK(

@@ -44,6 +44,7 @@ struct SimulationStats {
   std::uint64_t instant_iterations = 0;   // ... their closest-feature queries
   std::uint64_t instant_unfound = 0;      // ... ended receding, stalled or at their query cap
   std::uint64_t penetrations = 0;        // queries that found overlapping bodies
+  double deepest_penetration_m = 0.0;    // ... the deepest overlap among them of known depth [m]
   std::uint64_t distance_failures = 0;   // closest-feature walks that hit their step limit
   std::uint64_t impulse_failures = 0;    // collisions whose integration failed
   std::uint64_t centre_of_pressure = 0;  // collisions resolved by the centre-of-pressure rule

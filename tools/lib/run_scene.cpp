@@ -384,6 +384,7 @@ nlohmann::json summary_json(const RunResult& r) {
                      {"instant_iterations", s.instant_iterations},
                      {"instant_unfound", s.instant_unfound},
                      {"penetrations", s.penetrations},
+                     {"deepest_penetration_m", s.deepest_penetration_m},
                      {"distance_failures", s.distance_failures},
                      {"impulse_failures", s.impulse_failures},
                      {"centre_of_pressure", s.centre_of_pressure},
