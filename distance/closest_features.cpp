@@ -149,7 +149,8 @@ double mesh_overlap(const FeatureMesh& a, const FeatureMesh& b, const Mat3& R_AB
 
 // The rounding check of two overlapping polyhedra runs in the event loop only where it is cheap:
 // E_a E_b (V_a + V_b) up to this (a box pair: 2,304; two 12-point hulls: about 22,000). Larger
-// polyhedra keep V-Clip's verdict, any overlap a penetration.
+// polyhedra keep V-Clip's verdict, any overlap a penetration, with V-Clip's normal and no
+// depth.
 constexpr int kRoundingCheckBudget = 100000;
 
 using Piece = ShapeGeometry::Piece;

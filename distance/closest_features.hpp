@@ -13,7 +13,9 @@
 // `distance` is 0. Depth and a recovery direction come from libccd's MPR in
 // distance/crosscheck/mpr.hpp (a separate library, palpable_distance_crosscheck, that the
 // simulator may link optionally), except for spheres and halfspaces where `penetration_depth`
-// is exact.
+// is exact, and for two polyhedra small enough for the separating-axis search (a box pair, two
+// hulls of a dozen points), where it is the least overlap over the separating axes - an upper
+// bound, a translation by it along n_W separates them - and n_W that axis.
 //
 // The query allocates nothing once the pair's cache has been used (compound pairs size their
 // cache on first use).
@@ -86,7 +88,9 @@ class ShapeGeometry {
 struct DistanceResult {
   ContactStatus status = ContactStatus::kFailed;
   double distance = 0.0;           // [m] > 0 separated; 0 touching or penetrating
-  double penetration_depth = 0.0;  // [m] exact for sphere/halfspace pairs; NaN where unknown
+  double penetration_depth = 0.0;  // [m] exact for sphere/halfspace pairs, an upper bound for
+                                   // polyhedra (least overlap over separating axes); NaN where
+                                   // unknown (polyhedra beyond that search's budget)
   Vec3 p1_W = Vec3::Zero();        // closest point on body 1
   Vec3 p2_W = Vec3::Zero();        // closest point on body 2
   Vec3 n_W = Vec3::UnitZ();        // unit, from body 2 to body 1

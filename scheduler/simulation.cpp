@@ -89,8 +89,8 @@ DistanceResult Simulation::Impl::query(PairSet::Pair& p, const BodyState& s1, co
       stats.deepest_penetration_m = dr.penetration_depth;
     }
   }
-  // DESIGN.md §5 step 6: no penetration deeper than the envelope (a polyhedron pair's depth is
-  // unknown here: any overlap of one fails).
+  // DESIGN.md §5 step 6: no penetration deeper than the envelope (where a polyhedron pair's
+  // depth is unknown - beyond the separating-axis search's budget - any overlap of one fails).
   PALPABLE_DCHECK(
       dr.status != ContactStatus::kPenetrating || dr.penetration_depth <= settings().envelope_m,
       "bodies " + body(p.a).name + " and " + body(p.b).name +
