@@ -74,6 +74,16 @@ def main():
         check(f["events_settling"] == 0 and f["events_after_rest"] == 2,
               "every event of a scene that never moved is after rest")
 
+        # Off its final position only at the first sample: rest_at 0, still from 0.1 s, and an
+        # event between them is the settling (not after rest, as if nothing had moved).
+        write_trace(trace, {"a": [(t, 0.0, 0.0, 0.001 if t == 0.0 else 0.0) for t in times]})
+        write_events(events, [0.0, 0.05, 0.1, 1.0])
+        code, f = judge(script, trace, events)
+        check(code == 0 and f["rest_at_s"] == 0.0 and abs(f["still_from_s"] - 0.1) < 1e-12,
+              "a body that moves only before the second sample is still from it")
+        check(f["events_settling"] == 1 and f["events_after_rest"] == 2,
+              "its event at 0.05 s is the settling, those at 0.1 and 1 s after rest")
+
         # Moving until 1.8 s of 2 s: not at rest (exit 1).
         write_trace(trace, {"a": [(t, 0.0, 0.0, 0.01 * max(0.0, 1.9 - t)) for t in times]})
         code, f = judge(script, trace, events)

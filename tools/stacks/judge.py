@@ -12,7 +12,9 @@ Figures, over every dynamic body:
   rest_at           the last sample at which any body was farther than the rest tolerance
                     from its final position [s] (0: never moved)
   still_from        the sample after rest_at: from it on every body is at its final position
-                    at every sample [s] (the first sample if nothing moved)
+                    at every sample [s] (the first sample if no sample is off a final position;
+                    a body that moves only before the second sample has rest_at 0 and
+                    still_from the second sample)
   events_settling   events (--events) after rest_at and before still_from: the motion ended
                     somewhere in that sampling interval, so these belong to the settling
   events_after_rest events (--events) at or after still_from: while everything was still
@@ -49,7 +51,8 @@ def main():
     if not by_body:
         print("judge: %s: no samples" % args.trace, file=sys.stderr)
         sys.exit(2)
-    disp = horiz = turn = rest = 0.0
+    disp = horiz = turn = 0.0
+    moved = None  # the last sample at which any body was off its final position (None: none)
     for samples in by_body.values():
         t0, x0, y0, z0, q0 = samples[0]
         for (t, x, y, z, q) in samples:
@@ -60,13 +63,14 @@ def main():
         tf, xf, yf, zf, _ = samples[-1]
         for (t, x, y, z, _) in reversed(samples):
             if math.sqrt((x - xf) ** 2 + (y - yf) ** 2 + (z - zf) ** 2) > args.rest_tolerance:
-                rest = max(rest, t)
+                moved = t if moved is None else max(moved, t)
                 break
     end = max(s[-1][0] for s in by_body.values())
     times = sorted({sample[0] for samples in by_body.values() for sample in samples})
-    still = next((t for t in times if t > rest), end) if rest > 0.0 else times[0]
+    rest = 0.0 if moved is None else moved
+    still = times[0] if moved is None else next((t for t in times if t > moved), end)
     event_times = [float(e["t"]) for e in events]
-    settling = sum(1 for t in event_times if rest < t < still)
+    settling = sum(1 for t in event_times if moved is not None and moved < t < still)
     after = sum(1 for t in event_times if t >= still)
     at_rest = rest <= end - 0.5
     figures = {"displacement_m": disp, "horizontal_m": horiz, "turn_rad": turn, "rest_at_s": rest,
