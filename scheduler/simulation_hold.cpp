@@ -231,9 +231,10 @@ void Simulation::Impl::part_released(std::uint32_t index, double t) {
   // ball rolling off a ball, held at a gap of zero): let go 5e-12 to 6e-11 m into the other
   // body, the pair was found overlapping at every check (51 and 114 times at the progress floor)
   // until the bodies had parted. Overlapping by less than that drift's scale (below) where the
-  // depth is known (spheres, halfspaces), the body the release set free is moved out along the
-  // normal (both, by their inverse masses, if both are free; neither if neither is: a body still
-  // held is where its own links hold it).
+  // depth is known (spheres, halfspaces, and polyhedra within closest_features' separating-axis
+  // search, whose normal is then the axis of least overlap), the body the release set free is
+  // moved out along the normal (both, by their inverse masses, if both are free; neither if
+  // neither is: a body still held is where its own links hold it).
   const PairSet::Pair& q = pairs.pair(index);
   Body& a = body(q.a);
   Body& b = body(q.b);
