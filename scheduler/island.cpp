@@ -1171,6 +1171,14 @@ Island::PlanResult Island::plan(World& world, const std::vector<const ShapeGeome
       links.erase(links.begin() + *it);
     }
   };
+  // No motion can be planned from a contact problem that is inconsistent or not finite: every
+  // contact lets go, and the island's bodies fly free from the plan's instant.
+  auto let_all_go = [&] {
+    result.inconsistent = true;
+    std::vector<int> all(links.size());
+    for (std::size_t i = 0; i < links.size(); ++i) all[i] = static_cast<int>(i);
+    remove_links(all);
+  };
   auto state_of = [&](BodyId id) -> BodyState {
     const int k = index_of(id);
     return k >= 0 ? anchor_[static_cast<std::size_t>(k)] : world.bodies[id.index].state;
@@ -1394,10 +1402,7 @@ Island::PlanResult Island::plan(World& world, const std::vector<const ShapeGeome
     if (!forced) before = p.contacts;
     modes = choose_held_modes(p.bodies, p.contacts, still, 1e-9);
     if (modes.solution.status != HeldStatus::kOk) {
-      result.inconsistent = true;
-      std::vector<int> all(links.size());
-      for (std::size_t i = 0; i < links.size(); ++i) all[i] = static_cast<int>(i);
-      remove_links(all);
+      let_all_go();
       return result;
     }
     // Patches that were reduced (the body tips): about its own edge or vertex, the link keeps
@@ -1478,8 +1483,14 @@ Island::PlanResult Island::plan(World& world, const std::vector<const ShapeGeome
   }
   // Rebuild for the contacts that remain (their modes are now the links').
   p = build_problem(*this, world, anchor_, t);
+  // Its modes were chosen from a solve of this problem; rounding can still leave this one
+  // inconsistent, and classify reads every contact's motion from it.
   const HeldSolution sol = solve_held(p.bodies, p.contacts);
-  classify(world, geometry, p.contacts, sol);
+  if (sol.status == HeldStatus::kOk) {
+    classify(world, geometry, p.contacts, sol);
+  } else {
+    let_all_go();
+  }
   for (std::size_t k = 0; k < bodies.size(); ++k) world.bodies[bodies[k].index].state = anchor_[k];
   return result;
 }
