@@ -4,6 +4,7 @@
 #include "tools/commands.hpp"
 #include "tools/lib/atomic_file.hpp"
 #include "tools/lib/exit_codes.hpp"
+#include "tools/lib/heap.hpp"
 #include "tools/version.hpp"
 
 #include <CLI/CLI.hpp>
@@ -32,6 +33,7 @@ int main(int argc, char** argv) {
   using namespace palpable::tools;
   // SIGINT, SIGTERM, SIGHUP, SIGPIPE: remove every temporary output file, exit 128 + signal.
   install_output_cleanup_on_signals();
+  keep_freed_heap();
   CLI::App app{
       "Palpable: impulse-based, event-driven rigid-body simulation with exact ballistic flight,\n"
       "closest-feature collision detection and Coulomb friction integrated over the normal "

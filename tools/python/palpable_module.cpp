@@ -6,6 +6,7 @@
 #include "scenarios/json_reader.hpp"
 #include "scenarios/scene.hpp"
 #include "scheduler/simulation.hpp"
+#include "tools/lib/heap.hpp"
 #include "tools/lib/impact_spec.hpp"
 #include "tools/lib/run_scene.hpp"
 #include "tools/version.hpp"
@@ -215,6 +216,8 @@ PYBIND11_MODULE(_palpable, m) {
   m.doc() = "Palpable: impulse-based, event-driven rigid-body simulation (compiled core)";
   m.attr("__version__") = tools::kVersion;
   m.attr("commit") = tools::kGitCommit;
+  // The Python process's heap keeps what the simulations free, as the command line's does.
+  tools::keep_freed_heap();
   static py::exception<InputError> input_error(m, "InputError", PyExc_ValueError);
   py::register_exception_translator([](std::exception_ptr p) {
     try {
