@@ -560,9 +560,12 @@ StepResult Simulation::step(double t_end, SimulationObserver* observer) {
 
 void Simulation::run_until(double t_end, SimulationObserver* observer,
                            const std::function<void(double)>& progress) {
+  // Every 64 events: an event of a large island can take 0.2 s of CPU, and at every 4096 a
+  // pile's reports lagged its time by minutes (a pile of 100 balls reported 0.533 s for minutes
+  // while it ran at 0.624 s).
   std::uint64_t since_progress = 0;
   while (!impl_->step(t_end, observer).done) {
-    if (progress && ++since_progress >= 4096) {
+    if (progress && ++since_progress >= 64) {
       since_progress = 0;
       progress(impl_->now);
     }

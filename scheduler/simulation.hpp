@@ -117,7 +117,7 @@ class Simulation {
   // Processes the next event if it is due at or before t_end, and says what it did.
   StepResult step(double t_end, SimulationObserver* observer = nullptr);
   // Runs every event up to and including t_end (samples at k x interval <= t_end).
-  // `progress` (optional) is called now and then with the current time.
+  // `progress` (optional) is called every 64 events with the current time.
   void run_until(double t_end, SimulationObserver* observer,
                  const std::function<void(double)>& progress = {});
 
