@@ -559,7 +559,7 @@ StepResult Simulation::step(double t_end, SimulationObserver* observer) {
 }
 
 void Simulation::run_until(double t_end, SimulationObserver* observer,
-                           const std::function<void(double)>& progress) {
+                           const std::function<bool(double)>& progress) {
   // Every 64 events: an event of a large island can take 0.2 s of CPU, and at every 4096 a
   // pile's reports lagged its time by minutes (a pile of 100 balls reported 0.533 s for minutes
   // while it ran at 0.624 s).
@@ -567,7 +567,7 @@ void Simulation::run_until(double t_end, SimulationObserver* observer,
   while (!impl_->step(t_end, observer).done) {
     if (progress && ++since_progress >= 64) {
       since_progress = 0;
-      progress(impl_->now);
+      if (!progress(impl_->now)) return;
     }
   }
   impl_->now = std::max(impl_->now, t_end);

@@ -117,9 +117,10 @@ class Simulation {
   // Processes the next event if it is due at or before t_end, and says what it did.
   StepResult step(double t_end, SimulationObserver* observer = nullptr);
   // Runs every event up to and including t_end (samples at k x interval <= t_end).
-  // `progress` (optional) is called every 64 events with the current time.
+  // `progress` (optional) is called every 64 events with the current time; where it returns
+  // false, the run stops there, between two events, and time() is that event's time.
   void run_until(double t_end, SimulationObserver* observer,
-                 const std::function<void(double)>& progress = {});
+                 const std::function<bool(double)>& progress = {});
 
   const World& world() const;
   const SimulationStats& stats() const;

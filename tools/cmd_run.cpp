@@ -47,13 +47,22 @@ palpable::tools::CommandRegistration registration{
           app.add_option("--end", *end, "End time [s], replacing the scene's end_time");
       app.add_option("--summary-json", options->summary_path,
                      "Write the summary (statistics, wall time, reference figures) as JSON");
+      auto cpu_limit = std::make_shared<double>(0.0);
+      auto* cpu_limit_option = app.add_option(
+          "--cpu-limit", *cpu_limit,
+          "Stop the run once it has used this much CPU time [s], checked every 64 events: its\n"
+          "outputs are written and hold the run up to the event it stopped after, the summary\n"
+          "says where (virtual_time_s, and \"stopped\" in --summary-json), and it exits 4.\n"
+          "For budgets over batches of runs (a run to its end exits 0 as usual).");
       auto progress = std::make_shared<bool>(false);
       app.add_flag("--progress", *progress,
                    "Report the simulated time reached on stderr even when it is not a terminal\n"
                    "(by default only on a terminal): at most 4 times a second, after the first\n"
                    "second of wall time, each report starting with a carriage return.");
-      return std::function<int()>([options, end, end_option, progress] {
+      return std::function<int()>([options, end, end_option, cpu_limit, cpu_limit_option,
+                                   progress] {
         if (end_option->count() > 0) options->end_time = *end;
+        if (cpu_limit_option->count() > 0) options->cpu_limit_s = *cpu_limit;
         options->progress = *progress || ::isatty(2) != 0;
         options->keep_trace = false;  // memory flat in simulated time: stream, keep no history
         std::vector<std::pair<std::string, std::string>> outputs = {
@@ -78,7 +87,7 @@ palpable::tools::CommandRegistration registration{
           std::cerr << "palpable: warning: " << options->scene_path << ": " << trouble
                     << ": the trace may be wrong\n";
         }
-        return palpable::tools::kExitOk;
+        return result.stop ? palpable::tools::kExitStopped : palpable::tools::kExitOk;
       });
     }};
 

@@ -40,7 +40,8 @@ int main(int argc, char** argv) {
       "impulse\n"
       "(after Mirtich & Canny, 1995).\n\n"
       "Exit codes: 0 success; 1 the run failed; 2 bad input (command line, scene, spec), nothing\n"
-      "run; 3 the run finished but a requested check did not hold.\n",
+      "run; 3 the run finished but a requested check did not hold; 4 a run stopped at its\n"
+      "--cpu-limit before its end time (its outputs hold the run up to there).\n",
       "palpable"};
   app.set_version_flag("--version",
                        std::string("palpable ") + kVersion + " (git " + kGitCommit + ")");

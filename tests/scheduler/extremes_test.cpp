@@ -117,8 +117,6 @@ double mechanical_energy(const World& world, const std::vector<BodyState>& state
   return e;
 }
 
-struct EventCapHit {};
-
 struct Outcome {
   SimulationStats stats;
   bool capped = false;
@@ -268,13 +266,10 @@ Outcome run(const Run& spec) {
   Simulation sim(spec.world, SimulationOptions{spec.interval});
   Checker checker(sim.world(), out, spec.keep_samples);
   checker.sim = &sim;
-  try {
-    sim.run_until(spec.t_end, &checker, [&](double) {
-      if (sim.stats().events - sim.stats().samples > spec.event_cap) throw EventCapHit{};
-    });
-  } catch (const EventCapHit&) {
-    out.capped = true;
-  }
+  sim.run_until(spec.t_end, &checker, [&](double) {
+    out.capped = sim.stats().events - sim.stats().samples > spec.event_cap;
+    return !out.capped;  // past the cap the run stops
+  });
   out.stats = sim.stats();
   for (std::uint32_t i = 0; i < sim.world().bodies.size(); ++i) {
     out.final_states.push_back(sim.state_at(BodyId{i}, std::max(sim.time(), spec.t_end)));

@@ -25,8 +25,8 @@ if ! "$python" "$script" --palpable "$palpable" --count 40 --end-time 0.3 --seed
   echo "FAIL pile-cost exited $? on piles that end"; fail=1
 fi
 # 10 s of a pile of 100 balls in 3 s of CPU is beyond issue 14's bar (10 s of 200 bodies in 10
-# s): this run is cut off, and says how far it got (palpable run --progress, which reports from
-# its first second of wall time on).
+# s): this run is cut off (palpable run --cpu-limit), and its row says how far it got and what
+# it counted up to there.
 if ! "$python" "$script" --palpable "$palpable" --count 100 --end-time 10 --seeds 3 \
     --cpu-limit 3 --json "$work/cut.json" >"$work/cut.txt"; then
   echo "FAIL pile-cost exited $? on a pile cut off"; fail=1
@@ -56,6 +56,12 @@ reached = cut[0].get("reached_s")
 check(reached is not None and 0.0 < reached < 10.0, "it reached %s s of its 10 s" % reached)
 text = open(work + "/cut.txt").read()
 check("median       > 3" in text, "its median reads '> 3'")
+check(cut[0].get("cpu_s", 0) >= 3 and cut[0].get("island_plans", 0) > 0 and
+      cut[0].get("retry_limit_hits") == 0,
+      "its counts up to there are read (%s plans, %s retry-limit hits)" %
+      (cut[0].get("island_plans"), cut[0].get("retry_limit_hits")))
+check(abs(cut[0].get("cpu_per_simulated_s", 0) - cut[0].get("cpu_s", 0) / (reached or 1)) < 1e-9,
+      "its CPU per simulated second is of the time reached")
 check("reached %.3f s" % (reached or 0.0) in text, "its row says how far it got")
 check(len(hulls) == 1 and not hulls[0]["cut"] and "error" not in hulls[0],
       "the pile of 100 hulls reaches 0.3 s")

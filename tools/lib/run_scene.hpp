@@ -63,6 +63,9 @@ struct RunOptions {
   std::string events_path;             // empty: no events file
   std::string summary_path;            // empty: no summary JSON (summary_json) file
   bool progress = false;               // progress on stderr
+  // A budget of CPU time [s] (>= 0): checked every 64 events, the run stops at the first check
+  // past it, between two events, with its outputs holding the run up to there (RunResult::stop).
+  std::optional<double> cpu_limit_s;
   // Numerical trouble (see numerical_trouble) fails the run: it throws and writes no file.
   bool strict = false;
   // Keep every sample and contact in RunResult::trace. Off, they are kept only when the scene's
@@ -75,6 +78,13 @@ struct RunOptions {
 struct RunResult {
   Scene scene;
   SimulationStats stats;
+  // Where a run stopped at its CPU budget (RunOptions::cpu_limit_s) before the end time: the
+  // simulated time reached [s] and the budget. Empty for a run that reached its end time.
+  struct Stop {
+    double t_s = 0.0;
+    double cpu_limit_s = 0.0;
+  };
+  std::optional<Stop> stop;
   double wall_time_s = 0.0;
   double cpu_time_s = 0.0;
   Trace trace;  // the samples, in memory (see RunOptions::keep_trace)
