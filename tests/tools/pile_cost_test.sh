@@ -77,6 +77,14 @@ reports = b"\rpile: t = 0.195 / 10.000 s (2 %)\rpile: t = 0.286 / 10.000 s (3 %)
     b" " * 60 + b"\r"
 check(module.reached(reports) == 0.286, "the last of several reports is the time reached")
 check(module.reached(b"palpable: error: x") is None, "no report, no time")
+# Run side by side (--jobs), each seed's pile is that seed's: drawn from the module's shared
+# generator, four threads at once made other piles (of 3 rounds, none came out right).
+from concurrent.futures import ThreadPoolExecutor
+make = lambda s: json.dumps(module.pile.pile(100, "hull", 1.0, s))
+alone = [make(s) for s in range(1, 5)]
+with ThreadPoolExecutor(max_workers=4) as pool:
+    rounds = [list(pool.map(make, range(1, 5))) for _ in range(3)]
+check(all(r == alone for r in rounds), "piles made side by side are their seeds' piles")
 sys.exit(0 if ok else 1)
 PY
 exit $fail
