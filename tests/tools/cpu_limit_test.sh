@@ -10,13 +10,7 @@
 set -uo pipefail
 palpable=$1
 scenes=$2
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-cd "$work"
-fail=0
-check() {  # description, condition (a command)
-  if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi
-}
+. "$(dirname "$0")/harness.sh"  # work (the current directory), fail, check
 scene="$scenes/balls_in_dish.json"
 "$palpable" run "$scene" --trace whole.csv --events whole.ev.csv >/dev/null 2>&1
 check "the whole run exits 0" "[[ $? -eq 0 ]]"

@@ -6,13 +6,7 @@
 set -uo pipefail
 palpable=$1
 scenes=$2
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-cd "$work"
-fail=0
-check() {  # description, condition (a command)
-  if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi
-}
+. "$(dirname "$0")/harness.sh"  # work (the current directory), fail, check
 nest() {  # N: an array nested N deep
   head -c "$1" /dev/zero | tr '\0' '['
   head -c "$1" /dev/zero | tr '\0' ']'
