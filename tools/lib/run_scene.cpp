@@ -382,7 +382,7 @@ nlohmann::json summary_json(const RunResult& r) {
   const SimulationStats& s = r.stats;
   nlohmann::json j;
   j["scene"] = r.scene.name;
-  j["virtual_time_s"] = r.stop ? r.stop->t_s : r.scene.end_time;
+  j["virtual_time_s"] = r.time_reached();
   if (r.stop) {
     j["stopped"] = {{"reason", "cpu_limit"},
                     {"cpu_limit_s", r.stop->cpu_limit_s},
@@ -447,7 +447,7 @@ std::string summary_text(const RunResult& r) {
   const SimulationStats& s = r.stats;
   std::ostringstream out;
   out << "scene            " << r.scene.name << "\n"
-      << "virtual time     " << (r.stop ? r.stop->t_s : r.scene.end_time) << " s";
+      << "virtual time     " << r.time_reached() << " s";
   if (r.stop) {
     out << " of " << r.scene.end_time << " s: stopped at the CPU limit (" << r.stop->cpu_limit_s
         << " s)";

@@ -85,6 +85,8 @@ struct RunResult {
     double cpu_limit_s = 0.0;
   };
   std::optional<Stop> stop;
+  // The simulated time the run reached [s]: its end time, or where it stopped.
+  double time_reached() const { return stop ? stop->t_s : scene.end_time; }
   double wall_time_s = 0.0;
   double cpu_time_s = 0.0;
   Trace trace;  // the samples, in memory (see RunOptions::keep_trace)
