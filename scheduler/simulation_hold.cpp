@@ -348,23 +348,7 @@ void Simulation::Impl::replan(std::uint32_t i, double t) {
     if (r.inconsistent) ++stats.held_inconsistent;
     count_integration(is);
     for (std::uint32_t pair : r.released) {
-      PairSet::Pair& q = pairs.pair(pair);
-      q.held = false;
-      q.lifted = true;
-      // Let go at the instant of its own collision, it keeps its count there: a hold that lets
-      // go at once and collides again moves through the rounds of collide_or_hold (and at last
-      // the retry limit) instead of looping at one instant; and it counts as a quick release
-      // (hold_round), which a hold that lasts resets. A hold let go within the progress floor
-      // of its collision counts as quick too: a hull held against a hull's side, its centre of
-      // pressure on its patch's edge, tipped 1.6e-10 s after each hold, was let go, struck
-      // again at 2e-11 m/s and held, 17,500 times in 3 ms of simulated time (112 s of CPU).
-      const bool quick = t - q.last_collision_t <= progress_floor(t);
-      q.quick_releases = quick ? static_cast<std::uint8_t>(std::min(q.quick_releases + 1, 255)) : 0;
-      if (q.last_collision_t != t) {
-        q.last_collision_t = t;
-        q.collisions_at_t = 0;
-      }
-      report("release", q.a, q.b, body(q.a).state.x_W, t);
+      note_release(pair, t);
       let_go.push_back(pair);
     }
     bool changed = false;
@@ -377,6 +361,26 @@ void Simulation::Impl::replan(std::uint32_t i, double t) {
   }
   for (std::uint32_t pair : let_go) part_released(pair, t);
   refresh_moved(touched, t);
+}
+
+void Simulation::Impl::note_release(std::uint32_t index, double t) {
+  PairSet::Pair& q = pairs.pair(index);
+  q.held = false;
+  q.lifted = true;
+  // Let go at the instant of its own collision, it keeps its count there: a hold that lets go at
+  // once and collides again moves through the rounds of collide_or_hold (and at last the retry
+  // limit) instead of looping at one instant; and it counts as a quick release (hold_round),
+  // which a hold that lasts resets. A hold let go within the progress floor of its collision
+  // counts as quick too: a hull held against a hull's side, its centre of pressure on its
+  // patch's edge, tipped 1.6e-10 s after each hold, was let go, struck again at 2e-11 m/s and
+  // held, 17,500 times in 3 ms of simulated time (112 s of CPU).
+  const bool quick = t - q.last_collision_t <= progress_floor(t);
+  q.quick_releases = quick ? static_cast<std::uint8_t>(std::min(q.quick_releases + 1, 255)) : 0;
+  if (q.last_collision_t != t) {
+    q.last_collision_t = t;
+    q.collisions_at_t = 0;
+  }
+  report("release", q.a, q.b, body(q.a).state.x_W, t);
 }
 
 void Simulation::Impl::count_integration(const Island& is) {
