@@ -217,7 +217,10 @@ class Island {
   // The event that makes the next plan (set by the loop when the motion reaches `event`; plan()
   // reads and clears it). A plan after a collision or a hold has none.
   IslandEvent trigger;
+  // Its motions that ended within 1e-3 of the progress floor of the one before, in a row, and the
+  // pairs whose links' events ended them (Simulation: past 50, those contacts let go).
   int stalls = 0;
+  std::vector<std::uint32_t> stall_pairs;
   // Held contacts joined it at this instant and it has not been planned since: its plan waits
   // for an island event at that instant, after the instant's pair checks (so contacts that meet
   // together, a stack placed touching, are planned together, not one by one).

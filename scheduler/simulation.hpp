@@ -64,7 +64,8 @@ struct SimulationStats {
   std::uint64_t rests = 0;              // islands put at rest
   std::uint64_t rocking_ends = 0;       // bodies stopped at the end of a rocking train
   std::uint64_t held_inconsistent = 0;  // contact problems without a solution (let go)
-  std::uint64_t stalled_islands = 0;    // islands that stopped making progress (let go)
+  // Islands whose motions stopped making progress (the contacts ending them let go).
+  std::uint64_t stalled_islands = 0;
   // Integrated island motions (Island::integration): Dormand-Prince steps accepted and rejected,
   // and motions whose contact problem broke down along the way (ended early, re-planned).
   std::uint64_t island_steps = 0;

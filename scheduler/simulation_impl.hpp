@@ -325,9 +325,9 @@ struct Simulation::Impl {
   // splits it where its links no longer connect it, frees bodies held by nothing, queues its next
   // event and refreshes its bodies' boxes and bounds.
   void replan(std::uint32_t i, double t);
-  // Pair `index`'s held contact let go at t (a plan released it): it is lifted, counted as a
-  // quick release if it came within the progress floor of its collision, and reported. Its link
-  // is already out of its island; part_released follows the plan.
+  // Pair `index`'s held contact let go at t (a plan released it, or its island stalled): it is
+  // lifted, counted as a quick release if it came within the progress floor of its collision,
+  // and reported. Its link is already out of its island; part_released follows the plan.
   void note_release(std::uint32_t index, double t);
   // After a release: a pair let go overlapping by its held motion's drift is parted.
   void part_released(std::uint32_t index, double t);
