@@ -88,23 +88,8 @@ done
 # train of collisions 5e-9 s apart (708 in 3.4e-6 s), the run stalled before 0.388 s. A rebound
 # below the settling speed is now held. No pair may collide 100 times within 1e-5 s.
 if run_pile train "100 hull 0.3864 --seed 8" --events "$work/train.csv"; then
-  most=$("$python" - "$work/train.csv" <<'PY'
-import collections, csv, sys
-times = collections.defaultdict(list)
-for row in csv.DictReader(open(sys.argv[1])):
-    if row["kind"] in ("collision", "microcollision"):
-        times[(row["body_a"], row["body_b"])].append(float(row["t"]))
-most = 0
-for ts in times.values():
-    ts.sort()
-    j = 0
-    for i in range(len(ts)):
-        while ts[i] - ts[j] > 1e-5:
-            j += 1
-        most = max(most, i - j + 1)
-print(most)
-PY
-)
+  most=$("$python" "$source_dir/tests/tools/pair_event_peak.py" "$work/train.csv" 1e-5 \
+    collision,microcollision)
   if [ "$most" -lt 100 ]; then
     echo "ok   100 hulls, seed 8, to 0.3864 s: at most $most collisions of a pair within 1e-5 s"
   else

@@ -18,24 +18,9 @@ source_dir=$3
 "$palpable" run pile.json --events events.csv --cpu-limit 400 >/dev/null 2>err
 status=$?
 check "100 hulls, seed 2, reach 0.77 s (exit $status)" '[ "$status" -eq 0 ]'
-most=$("$python" - events.csv <<'PY'
-import collections, csv, sys
 # The kinds an island's mode changes report (Simulation's island events).
-kinds = {"stick", "slip", "spin_stop", "roll_stop", "lift_off", "tip", "landing"}
-times = collections.defaultdict(list)
-for row in csv.DictReader(open(sys.argv[1])):
-    if row["kind"] in kinds:
-        times[(row["body_a"], row["body_b"])].append(float(row["t"]))
-most = 0
-for ts in times.values():
-    j = 0
-    for i in range(len(ts)):
-        while ts[i] - ts[j] > 1e-5:
-            j += 1
-        most = max(most, i - j + 1)
-print(most)
-PY
-)
+most=$("$python" "$source_dir/tests/tools/pair_event_peak.py" events.csv 1e-5 \
+  stick,slip,spin_stop,roll_stop,lift_off,tip,landing)
 check "no pair changes modes 1,000 times within 1e-5 s (the most: $most)" \
   '[ -n "$most" ] && [ "$most" -lt 1000 ]'
 exit $fail
