@@ -528,7 +528,7 @@ void Simulation::Impl::island_event(std::uint32_t i, double t) {
   // over its floor edge, whose end touched a resting hull at the floor, had the floor contacts of
   // both stop slipping in turn every 7e-10 s, 43,640 times in 3.4e-5 s - 100 hulls, seed 2, at
   // 0.7616 s. A ball's rolling on a ball that could neither hold nor start in any direction
-  // stopped at once, 50 times at one instant; letting the whole island of 20 balls go struck all
+  // stopped at once, 50 times at one instant; letting the whole island of 13 balls go struck all
   // of them again there, and so again, the clock creeping by 1e-9 s.)
   std::vector<std::uint32_t> let_go;
   if (t - is.last_event_t <= 1e-3 * progress_floor(t)) {
