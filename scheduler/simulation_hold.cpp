@@ -496,12 +496,28 @@ void Simulation::Impl::island_event(std::uint32_t i, double t) {
     return;
   }
   ++stats.mode_changes;
+  // Motions that keep ending within 1e-3 of the progress floor of their start make no progress
+  // at the scheduler's resolution: after 50 in a row, the contacts whose events ended them let go
+  // (all of the island's, where no link's event did), as a plan lets go, and their pairs' checks
+  // meet them again; a pair let go quickly again and again gives way to microcollisions
+  // (hold_round). (Ending at the same clock tick only, 1e-12 of t, was not caught: a hull tipping
+  // over its floor edge, whose end touched a resting hull at the floor, had the floor contacts of
+  // both stop slipping in turn every 7e-10 s, 43,640 times in 3.4e-5 s - 100 hulls, seed 2, at
+  // 0.7616 s. A ball's rolling on a ball that could neither hold nor start in any direction
+  // stopped at once, 50 times at one instant; letting the whole island of 13 balls go struck all
+  // of them again there, and so again, the clock creeping by 1e-9 s.)
+  const bool no_progress = t - is.last_event_t <= 1e-3 * progress_floor(t);
+  is.last_event_t = t;
+  if (!no_progress) {
+    is.stalls = 0;
+    is.stall_pairs.clear();
+  }
   const IslandEvent ev = is.event;
   is.trigger = ev;
   if (ev.link >= 0 && ev.link < static_cast<int>(is.links.size())) {
     const HeldLink& link = is.links[static_cast<std::size_t>(ev.link)];
-    if (std::find(is.stall_pairs.begin(), is.stall_pairs.end(), link.pair) ==
-        is.stall_pairs.end()) {
+    const auto& stalled = is.stall_pairs;
+    if (no_progress && std::find(stalled.begin(), stalled.end(), link.pair) == stalled.end()) {
       is.stall_pairs.push_back(link.pair);
     }
     if (ev.kind != IslandEvent::Kind::kSegmentEnd) {
@@ -520,38 +536,21 @@ void Simulation::Impl::island_event(std::uint32_t i, double t) {
       is.links.erase(is.links.begin() + ev.link);
     }
   }
-  // Motions that keep ending within 1e-3 of the progress floor of their start make no progress
-  // at the scheduler's resolution: after 50 in a row, the contacts whose events ended them let go
-  // (all of the island's, where no link's event did), as a plan lets go, and their pairs' checks
-  // meet them again; a pair let go quickly again and again gives way to microcollisions
-  // (hold_round). (Ending at the same clock tick only, 1e-12 of t, was not caught: a hull tipping
-  // over its floor edge, whose end touched a resting hull at the floor, had the floor contacts of
-  // both stop slipping in turn every 7e-10 s, 43,640 times in 3.4e-5 s - 100 hulls, seed 2, at
-  // 0.7616 s. A ball's rolling on a ball that could neither hold nor start in any direction
-  // stopped at once, 50 times at one instant; letting the whole island of 13 balls go struck all
-  // of them again there, and so again, the clock creeping by 1e-9 s.)
   std::vector<std::uint32_t> let_go;
-  if (t - is.last_event_t <= 1e-3 * progress_floor(t)) {
-    if (++is.stalls > 50) {
-      ++stats.stalled_islands;
-      for (std::size_t k = is.links.size(); k-- > 0;) {
-        const std::uint32_t pair = is.links[k].pair;
-        if (!is.stall_pairs.empty() &&
-            std::find(is.stall_pairs.begin(), is.stall_pairs.end(), pair) == is.stall_pairs.end()) {
-          continue;
-        }
+  if (no_progress && ++is.stalls > 50) {
+    ++stats.stalled_islands;
+    const auto& stalled = is.stall_pairs;
+    for (std::size_t k = is.links.size(); k-- > 0;) {
+      const std::uint32_t pair = is.links[k].pair;
+      if (stalled.empty() || std::find(stalled.begin(), stalled.end(), pair) != stalled.end()) {
         note_release(pair, t);
         let_go.push_back(pair);
         is.links.erase(is.links.begin() + static_cast<std::ptrdiff_t>(k));
       }
-      is.stalls = 0;
-      is.stall_pairs.clear();
     }
-  } else {
     is.stalls = 0;
     is.stall_pairs.clear();
   }
-  is.last_event_t = t;
   replan(i, t);
   for (std::uint32_t pair : let_go) part_released(pair, t);
 }
