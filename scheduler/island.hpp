@@ -2,8 +2,9 @@
 // Contact that persists (DESIGN.md §8.1-8.3): dynamic bodies held in contact, and their motion
 // between events.
 //
-// A held contact (HeldLink) is kept in the two bodies' own frames: the support owns the contact
-// plane (a face, or a halfspace), the mover touches it with a face, an edge, a vertex or a sphere.
+// A held contact (HeldLink, scheduler/held_link.hpp) is kept in the two bodies' own frames: the
+// support owns the contact plane (a face, or a halfspace), the mover touches it with a face, an
+// edge, a vertex or a sphere.
 // The bodies it joins form an island with the contacts among them; fixed and kinematic bodies
 // bound it. Between events an island moves as its contact problem (impulse/contact_dynamics.hpp)
 // says, in closed form where one exists:
@@ -26,11 +27,10 @@
 #include "core/dormand_prince.hpp"
 #include "core/settings.hpp"
 #include "distance/closest_features.hpp"
-#include "distance/feature_mesh.hpp"
 #include "impulse/contact_dynamics.hpp"
+#include "scheduler/held_link.hpp"
 #include "scheduler/world.hpp"
 
-#include <optional>
 #include <vector>
 
 namespace palpable {
@@ -39,139 +39,6 @@ namespace palpable {
 // plane is on it (an island's landing events), and a fall from this height is a landing that
 // settles (Simulation's quiet landings).
 inline constexpr double kPlaneResolution = 1e-9;
-
-// A held contact, in the bodies' own frames (modelling frames M; S for the support's).
-struct HeldLink {
-  std::uint32_t pair = 0;  // the pair's slot (PairSet)
-  BodyId mover, support;
-  int support_piece = 0;  // which piece of a compound support holds it
-  // > 0: the mover is rounded by this radius about a core: a sphere centred at its origin (no
-  // feature), or a cylinder or capsule lying on its side (its feature is then the core, the
-  // piece's axis: the contact line is the axis moved by the radius against the normal).
-  double sphere_radius = 0.0;
-  // The mover's contact feature: a face (counter-clockwise about the mover's outward normal),
-  // an edge (2 points) or a vertex (1); empty for a sphere; the axis of a rounded side.
-  std::vector<Vec3> mover_feature_M;
-  // The support's face (counter-clockwise about normal_S); empty for a halfspace (unbounded).
-  std::vector<Vec3> support_face_S;
-  Vec3 normal_S = Vec3::UnitZ();  // the contact plane's outward normal, toward the mover
-  Vec3 point_S = Vec3::Zero();    // a point of the plane
-  Vec3 t1_S = Vec3::UnitX();      // a tangent fixed in the support: slip directions refer to it
-  double gap = 0.0;               // the gap held [m] (the mover's feature above the plane)
-  // The mover touches the plane with a point of a curved surface (an ellipsoid, a cylinder's
-  // rim, a capsule's end, a loaded ball): found afresh at every state as the support point of
-  // this smooth shape (the mover's piece, posed at piece_p_M, piece_R_M in its frame) against the
-  // plane's normal; mover_feature_M is empty, sphere_radius 0. The shape is the body's geometry,
-  // which outlives the link.
-  const Shape* curved_shape = nullptr;
-  Vec3 piece_p_M = Vec3::Zero();
-  Mat3 piece_R_M = Mat3::Identity();
-  // A cylinder's or capsule's curved link: the end held, +1 or -1 along the piece's z (the rim or
-  // end cap the point lies on, kept even where the body stands level and rounding would pick the
-  // other); 0 for other shapes.
-  double curved_end = 0.0;
-  // A round side's piece (sphere_radius > 0 about its axis): where the line tips about one of its
-  // ends, the link goes on as a curved point of that end (curved_shape).
-  const Shape* side_shape = nullptr;
-  // Neither side offers a plane (two spheres, a sphere or a vertex on an edge, an edge across an
-  // edge): a point contact along the line between the two features' closest points. The
-  // support's feature is then in support_face_S (1 point, or 2 for an edge; empty for a sphere of
-  // radius support_sphere_radius about its origin), and the normal turns with the features.
-  bool point_pair = false;
-  double support_sphere_radius = 0.0;
-  // A point pair of a sphere and a polyhedron's vertex or edge: that feature's Voronoi planes
-  // (V-Clip), in the polyhedron's body frame, >= 0 inside. While the sphere's centre is inside
-  // them the feature is the polyhedron's closest to it, so the gap held is the bodies' gap; when
-  // it leaves them (a ball pushing a turning pin passes from an edge over a face) the link lets
-  // go, and the pair's check finds the feature that touches now. Empty: not watched.
-  std::vector<VoronoiPlane> feature_region;
-  // An edge of a polyhedron held across an edge of another: feature_region is the mover's
-  // edge's Voronoi region (in its frame), watched at the support's closest point, and this the
-  // support's edge's (in the support's frame), watched at the mover's. While both closest points
-  // stay inside, they are the two convex bodies' closest points (V-Clip's condition), so nothing
-  // else of either body can touch the other. Empty otherwise.
-  std::vector<VoronoiPlane> support_region;
-  // Modes, carried from one plan to the next (see HeldContact).
-  bool sticks = true;
-  Vec2 slip_dir = Vec2::UnitX();
-  bool spin_sticks = true;
-  double spin_sign = 1.0;
-  bool roll_sticks = true;
-  Vec2 roll_dir = Vec2::UnitX();
-};
-
-// One side of a link at this instant.
-struct LinkSide {
-  const Body& body;
-  const ShapeGeometry& geometry;
-  const BodyState& state;
-};
-
-// The link of a pair to be held, from the query at its collision: which body owns the plane (a
-// face or a halfspace facing the other body), and the other's contact feature; where neither side
-// offers a plane, the two features of a point contact. nullopt for two parallel edges without a
-// plane (held by neither rule: they stay collisions), and for a curved surface touching along a
-// point or a line against anything but a plane (a smooth shape other than a cylinder's flat cap,
-// a loaded ball): it stays a train of microcollisions. A curved point on a plane is held with
-// the point found afresh from the shape (curved_shape); a cylinder's or capsule's side lying on a
-// plane is held like a sphere about its axis (sphere_radius). `envelope` [m]: a rim within the
-// landing level of its cap or its other rim is not held (see Island's landing events).
-std::optional<HeldLink> make_held_link(std::uint32_t pair, BodyId a, BodyId b,
-                                       const LinkSide& side_a, const LinkSide& side_b,
-                                       const DistanceResult& closest,
-                                       const ContactGeometry& geometry, double envelope);
-
-// The plane and the patch of a link at the given states, in the world: the reference point c (the
-// patch's centroid, on the mover's feature), the frame, and the patch (the mover's feature
-// intersected with the support's face, projected on the plane). Empty `polygon` and kPoint for a
-// single point. Returns false if the patch vanished (the mover left the support's face).
-bool place_link(const HeldLink& link, const BodyState& mover, const BodyState& support,
-                HeldContact& out);
-
-// How far a polyhedral mover's held feature (mover_feature_M) is above the link's plane at the
-// given states: its lowest point [m]; +inf for a link without one (a sphere, a curved point).
-double held_feature_height(const HeldLink& link, const BodyState& mover, const BodyState& support);
-
-// A support's edge watched against one of a held mover's edges (Island::integrate's landing
-// event): their half-edges in the two pieces' meshes, their common normal when they were chosen
-// (in the world, pointing out of the support), and the threshold their separation along it must
-// stay above (edge_watch_candidates: the separation).
-struct EdgeWatch {
-  int support_edge, mover_edge;
-  Vec3 axis_W;
-  double threshold;
-};
-
-// The pairs of edges a held link watches besides its vertices, each with its present separation:
-// an edge of the support and an edge of the mover (not one whose both ends are `held_vertex`,
-// the feature held, whose leaving the patch the tip event watches) whose lines pass within
-// `envelope` of each other at points inside both edges, at least 1e-3 rad from parallel, and
-// whose common normal lies in both edges' normal cones (a Minkowski face: along it, the
-// separation of the two edges is the two pieces' separation near there, negative where they
-// cross). These are the crossings that no vertex watch sees: neither body's vertex enters the
-// other. Both pieces are posed in the world (rotation and origin of the piece's frame).
-std::vector<EdgeWatch> edge_watch_candidates(const ShapeGeometry::Piece& mover, const Mat3& R_mover,
-                                             const Vec3& origin_mover,
-                                             const std::vector<bool>& held_vertex,
-                                             const ShapeGeometry::Piece& support,
-                                             const Mat3& R_support, const Vec3& origin_support,
-                                             double envelope);
-
-// The separation of a watched pair of edges along their common normal now, oriented as the
-// watch's axis (out of the support: negative where they cross; the cross product of the edges
-// reverses where they turn through parallel, the axis does not); +inf where the normal has
-// turned more than 60 degrees from the axis, or the edges are parallel (not the configuration
-// chosen: the faces' and vertices' watches cover it). Both meshes posed in the world.
-double edge_separation(const FeatureMesh& support, const Mat3& R_support,
-                       const Vec3& origin_support, const FeatureMesh& mover, const Mat3& R_mover,
-                       const Vec3& origin_mover, const EdgeWatch& watch);
-
-// The edge of a link's support face (support_face_S, in the world at `support`) on which all
-// `points` lie, measured within the link's plane (along its normal), to 1e-9 of the face's size;
-// -1 if none (or the support offers no face). A reduced patch on such an edge tips the mover over
-// the support's edge: the link's roles turn round.
-int support_edge_under(const HeldLink& link, const BodyState& support,
-                       const std::vector<Vec3>& points);
 
 // At a plan made by a stop: every other sliding component (slip, spin about the normal, rolling)
 // of `contacts` that decelerates so fast that, under the modes it has, it would stop within

@@ -25,6 +25,11 @@ foreach(f IN LISTS expected)
     message(FATAL_ERROR "not installed: ${f}")
   endif()
 endforeach()
+# A module's private headers (*_detail.hpp) stay behind.
+file(GLOB_RECURSE private_headers RELATIVE ${WORK}/prefix ${WORK}/prefix/include/*_detail.hpp)
+if(private_headers)
+  message(FATAL_ERROR "private headers installed: ${private_headers}")
+endif()
 # Only the five simulator modules: no cross-check (libccd) or tool library, no tests.
 file(GLOB installed_libs RELATIVE ${WORK}/prefix/lib ${WORK}/prefix/lib/*.a)
 list(LENGTH installed_libs n)

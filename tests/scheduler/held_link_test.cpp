@@ -1,9 +1,9 @@
-// A held link's geometry (scheduler/island.hpp) on hand-made links, without a simulation: which
+// A held link's geometry (scheduler/held_link.hpp) on hand-made links, without a simulation: which
 // edge of the support's face a reduced patch lies on (support_edge_under), where the link's plane
 // is tilted from that face, as a face-on-face link made from a closest-feature query's normal is;
 // which pairs of edges a held link watches, and their separation (edge_watch_candidates,
 // edge_separation), against closed forms and a brute-force separating-axis test.
-#include "scheduler/island.hpp"
+#include "scheduler/held_link.hpp"
 
 #include <catch2/catch.hpp>
 
