@@ -29,8 +29,9 @@ function(palpable_module name dir)
     if(PALPABLE_CHECKED)
       target_compile_definitions(${name} INTERFACE $<INSTALL_INTERFACE:PALPABLE_CHECKED=1>)
     endif()
-    # A header named *_detail.hpp is private to its module's own .cpp files: not installed.
-    list(FILTER _headers EXCLUDE REGEX "_detail\\.hpp$")
+    # A header named *_detail.hpp or *_impl.hpp is private to its module's own .cpp files (the
+    # shared helpers or state of one concept's implementation): not installed.
+    list(FILTER _headers EXCLUDE REGEX "_(detail|impl)\\.hpp$")
     install(FILES ${_headers} DESTINATION include/palpable/${_module})
   endif()
 endfunction()

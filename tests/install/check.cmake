@@ -25,8 +25,9 @@ foreach(f IN LISTS expected)
     message(FATAL_ERROR "not installed: ${f}")
   endif()
 endforeach()
-# A module's private headers (*_detail.hpp) stay behind.
-file(GLOB_RECURSE private_headers RELATIVE ${WORK}/prefix ${WORK}/prefix/include/*_detail.hpp)
+# A module's private headers (*_detail.hpp, *_impl.hpp) stay behind.
+file(GLOB_RECURSE private_headers RELATIVE ${WORK}/prefix ${WORK}/prefix/include/*_detail.hpp
+     ${WORK}/prefix/include/*_impl.hpp)
 if(private_headers)
   message(FATAL_ERROR "private headers installed: ${private_headers}")
 endif()

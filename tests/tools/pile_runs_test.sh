@@ -150,8 +150,9 @@ for seed in 4 5 8; do
     *) echo "FAIL 50 hulls, seed $seed, not at rest by 10 s: $verdict"; fail=1 ;;
   esac
   # Seed 8 had two hulls 0.8 mm into each other from 0.275 s (a link integrated without its
-  # contact, see scheduler/held_link.cpp support_edge_under): the run's warning counted 9.7 million
-  # overlapping queries, and took 167 s of CPU. A few are the integration's drift at a release.
+  # contact, see scheduler/held_link.cpp support_edge_under): the run's warning counted 9.7
+  # million overlapping queries, and took 167 s of CPU. A few are the integration's drift at a
+  # release.
   overlaps=$(sed -n 's/.*: \([0-9]*\) closest-feature queries found bodies overlapping.*/\1/p' "$work/err")
   if [ "${overlaps:-0}" -gt 1000 ]; then
     echo "FAIL 50 hulls, seed $seed: ${overlaps} closest-feature queries found bodies overlapping"
