@@ -635,10 +635,9 @@ class Assembly {
   // (Turned with the support alone, a ball's rolling held on a ball leaked its spin about the
   // turning normal into rolling, 1.5e-8 m/s after a 2 us motion, which the next plan read as
   // rolling against its own deceleration: 169 roll stops of one contact in 0.036 s of a pile of
-  // 100 balls.) Where n_dot is the support's turning, that is the support's turning alone.
+  // 100 balls.) Where the normal turns with the support (n_dot = w_s x n), this is w_s x t.
   static Vec3 tangent_rate(const HeldContact& c, const Kinematics& k, const Vec3& t) {
     const Vec3 turned = k.s.w.cross(t);
-    if (!c.has_n_dot) return turned;
     return turned - c.n_W * (c.n_W.dot(turned) + t.dot(k.n_dot));
   }
   // Row value: a . d(dw)/dt + a_dot . dw (a relative angular-acceleration row about a).
