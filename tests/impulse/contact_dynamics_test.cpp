@@ -597,6 +597,49 @@ TEST_CASE(
   }
 }
 
+namespace {
+
+// Ball 0 (radius Rm) on ball 1 (radius Rs), touching at the centres' line: its normal follows
+// the centres (n_dot from their relative velocity), friction 0.5 sliding, rolling resistance 1e-3
+// held; the caller sets the rest of the modes.
+HeldContact ball_on_ball(const std::vector<HeldBody>& b, double Rm, double Rs) {
+  HeldContact k;
+  k.mover = 0;
+  k.support = 1;
+  const Vec3 d = b[0].x_W - b[1].x_W;
+  k.n_W = d.normalized();
+  k.t1_W = k.n_W.unitOrthogonal();
+  k.t2_W = k.n_W.cross(k.t1_W);
+  k.c_W = b[1].x_W + Rs * k.n_W;
+  k.sphere_radius = Rm;
+  k.has_n_dot = true;
+  const Vec3 dv = b[0].v_W - b[1].v_W;
+  k.n_dot_W = (dv - dv.dot(k.n_W) * k.n_W) / d.norm();
+  k.friction = 0.5;
+  k.sticks = false;
+  k.rolling_resistance = 1e-3;
+  return k;
+}
+
+// The contact's velocities (contact_of rebuilds it from the bodies) after the bodies move for h
+// under the solution's accelerations; dw reduced to the rolling, its part in the tangent plane.
+template <class ContactOf>
+HeldContactMotion motion_along(const std::vector<HeldBody>& bodies, const HeldSolution& s, double h,
+                               const ContactOf& contact_of) {
+  std::vector<HeldBody> b = bodies;
+  for (std::size_t i = 0; i < b.size(); ++i) {
+    b[i].x_W += bodies[i].v_W * h + 0.5 * s.a_W[i] * h * h;
+    b[i].v_W += s.a_W[i] * h;
+    b[i].w_W += s.alpha_W[i] * h;
+  }
+  const HeldContact c = contact_of(b);
+  HeldContactMotion m = held_velocities(b, {c})[0];
+  m.dw_W -= m.dw_W.dot(c.n_W) * c.n_W;
+  return m;
+}
+
+}  // namespace
+
 TEST_CASE(
     "held: two dynamic spheres' slip and rolling rates are their derivatives along the motion",
     "[impulse][held]") {
@@ -619,21 +662,7 @@ TEST_CASE(
     const Vec3 rel = bodies[0].v_W - bodies[1].v_W;
     bodies[0].v_W -= rel.dot(n0) * n0;  // touching, not approaching
     auto contact_of = [&](const std::vector<HeldBody>& b) {
-      HeldContact k;
-      k.mover = 0;
-      k.support = 1;
-      const Vec3 d = b[0].x_W - b[1].x_W;
-      k.n_W = d.normalized();
-      k.t1_W = k.n_W.unitOrthogonal();
-      k.t2_W = k.n_W.cross(k.t1_W);
-      k.c_W = b[1].x_W + Rs * k.n_W;
-      k.sphere_radius = Rm;
-      k.has_n_dot = true;
-      const Vec3 dv = b[0].v_W - b[1].v_W;
-      k.n_dot_W = (dv - dv.dot(k.n_W) * k.n_W) / d.norm();
-      k.friction = 0.5;
-      k.rolling_resistance = 1e-3;
-      k.sticks = false;
+      HeldContact k = ball_on_ball(b, Rm, Rs);
       k.roll_sticks = false;
       return k;
     };
@@ -644,20 +673,9 @@ TEST_CASE(
     contacts[0].roll_dir = Vec2(now.dw_W.dot(k.t1_W), now.dw_W.dot(k.t2_W)).normalized();
     const HeldSolution s = solve_held(bodies, contacts);
     REQUIRE(s.status == HeldStatus::kOk);
-    auto motion_at = [&](double h) {
-      std::vector<HeldBody> b = bodies;
-      for (std::size_t i = 0; i < b.size(); ++i) {
-        b[i].x_W += bodies[i].v_W * h + 0.5 * s.a_W[i] * h * h;
-        b[i].v_W += s.a_W[i] * h;
-        b[i].w_W += s.alpha_W[i] * h;
-      }
-      const HeldContact c = contact_of(b);
-      HeldContactMotion m = held_velocities(b, {c})[0];
-      m.dw_W -= m.dw_W.dot(c.n_W) * c.n_W;  // the rolling
-      return m;
-    };
     const double dt = 1e-6;
-    const HeldContactMotion ahead = motion_at(dt), behind = motion_at(-dt);
+    const HeldContactMotion ahead = motion_along(bodies, s, dt, contact_of);
+    const HeldContactMotion behind = motion_along(bodies, s, -dt, contact_of);
     const Vec3 difference = (ahead.slip_W - behind.slip_W) / (2.0 * dt);
     CHECK((difference - s.motion[0].slip_rate_W).norm() <= 1e-6 * (1.0 + difference.norm()));
     auto tangential = [&](const Vec3& v) { return Vec3(v - v.dot(k.n_W) * k.n_W); };
@@ -693,22 +711,8 @@ TEST_CASE("held: a ball's rolling held sticking on a ball stays zero as the norm
     std::vector<HeldBody> bodies = {ball(0.1, Rm, xs + (Rm + Rs) * n0, v_m, w_m),
                                     ball(0.2, Rs, xs, v_s, w_s)};
     auto contact_of = [&](const std::vector<HeldBody>& b) {
-      HeldContact k;
-      k.mover = 0;
-      k.support = 1;
-      const Vec3 d = b[0].x_W - b[1].x_W;
-      k.n_W = d.normalized();
-      k.t1_W = k.n_W.unitOrthogonal();
-      k.t2_W = k.n_W.cross(k.t1_W);
-      k.c_W = b[1].x_W + Rs * k.n_W;
-      k.sphere_radius = Rm;
-      k.has_n_dot = true;
-      const Vec3 dv = b[0].v_W - b[1].v_W;
-      k.n_dot_W = (dv - dv.dot(k.n_W) * k.n_W) / d.norm();
-      k.friction = 0.5;
-      k.sticks = false;
+      HeldContact k = ball_on_ball(b, Rm, Rs);
       k.slip_dir = Vec2(slip.dot(k.t1_W), slip.dot(k.t2_W)).normalized();
-      k.rolling_resistance = 1e-3;
       return k;  // rolling held
     };
     const std::vector<HeldContact> contacts = {contact_of(bodies)};
@@ -717,20 +721,9 @@ TEST_CASE("held: a ball's rolling held sticking on a ball stays zero as the norm
     REQUIRE((k.n_dot_W - w_s.cross(k.n_W)).norm() > 1.0);
     const HeldSolution s = solve_held(bodies, contacts);
     REQUIRE(s.status == HeldStatus::kOk);
-    auto motion_at = [&](double h) {
-      std::vector<HeldBody> b = bodies;
-      for (std::size_t i = 0; i < b.size(); ++i) {
-        b[i].x_W += bodies[i].v_W * h + 0.5 * s.a_W[i] * h * h;
-        b[i].v_W += s.a_W[i] * h;
-        b[i].w_W += s.alpha_W[i] * h;
-      }
-      const HeldContact c = contact_of(b);
-      HeldContactMotion m = held_velocities(b, {c})[0];
-      m.dw_W -= m.dw_W.dot(c.n_W) * c.n_W;  // the rolling
-      return m;
-    };
     const double dt = 1e-6;
-    const HeldContactMotion ahead = motion_at(dt), behind = motion_at(-dt);
+    const HeldContactMotion ahead = motion_along(bodies, s, dt, contact_of);
+    const HeldContactMotion behind = motion_along(bodies, s, -dt, contact_of);
     const Vec3 roll_rate = (ahead.dw_W - behind.dw_W) / (2.0 * dt);
     CHECK(roll_rate.norm() <= 1e-6);
     // And as the problem reports it: the rolling rate's part in the tangent plane.
