@@ -40,13 +40,18 @@ namespace palpable {
 // settles (Simulation's quiet landings).
 inline constexpr double kPlaneResolution = 1e-9;
 
-// At a plan made by a stop: every other sliding component (slip, spin about the normal, rolling)
-// of `contacts` that decelerates so fast that, under the modes it has, it would stop within
-// `resolution` seconds (the scheduler's progress floor) is marked stopped too (slip_stopped,
-// spin_stopped, roll_stopped), so that its modes are chosen from rest together with the one
-// that stopped. Components at rest, accelerating, or further from their stop are left alone.
+// At a plan: every sliding component (slip, spin about the normal, rolling) of `contacts` that
+// decelerates under the modes it has, resisted against its present direction, and would stop
+// within `resolution` seconds (at a plan made by a stop: the scheduler's progress floor) is
+// marked stopped (slip_stopped, spin_stopped, roll_stopped), so that its modes are chosen from
+// rest together with the rest of the island's; and so is every decelerating slip and rolling
+// that moves no faster than `floor` (m/s at the contact; a rolling at its point's size): the slip
+// floor of the motion the plan starts, below which that motion could not resolve it. (Not a
+// spin: stopped at that floor too, at its island's size as its events judge it, 24 piles of 50
+// hulls took 1.5 times the CPU.) Components at rest, accelerating, or further from their stop
+// are left alone.
 void stop_imminent(const std::vector<HeldBody>& bodies, std::vector<HeldContact>& contacts,
-                   double resolution);
+                   double resolution, double floor = 0.0);
 
 // The event that ends an island's present motion.
 struct IslandEvent {

@@ -1,5 +1,6 @@
 // stop_imminent (scheduler/island.hpp): at a plan made by a stop, the other sliding components of
-// the island that would stop within the scheduler's progress floor are stopped with it. Blocks
+// the island that would stop within the scheduler's progress floor are stopped with it; at any
+// plan, the decelerating slips and rollings no faster than the next motion's slip floor. Blocks
 // sliding and spinning on a fixed floor, whose stops are closed forms: a block sliding at v
 // decelerates at mu g and stops after v / (mu g); one spinning at w decelerates at
 // mu g r_eff m / I_zz.
@@ -113,4 +114,59 @@ TEST_CASE("stop_imminent: a spin that would stop within the progress floor stops
     CHECK(contacts[1].spin_stopped == (factor < 1.0));
     CHECK_FALSE(contacts[1].slip_stopped);
   }
+}
+
+TEST_CASE("stop_imminent: a decelerating slip no faster than the motion's floor stops at any plan",
+          "[scheduler][island]") {
+  // No stop made this plan (resolution 0): only the floor applies. A cube sliding at v sheds
+  // mu g per second; at 1e-6 m/s it would take 2e-7 s to stop, well beyond a zero resolution.
+  const double floor = 5e-7;
+  for (const double v : {0.5 * floor, 0.99 * floor, 1.01 * floor, 10.0 * floor}) {
+    std::vector<HeldBody> bodies = {cube(0.0, Vec3(v, 0.0, 0.0), Vec3::Zero())};
+    std::vector<HeldContact> contacts = {face_on_floor(0, 0.0)};
+    stop_imminent(bodies, contacts, 0.0, floor);
+    INFO("slip at " << v / floor << " of the floor");
+    CHECK(contacts[0].slip_stopped == (v <= floor));
+    // Without a floor, nothing stops.
+    contacts[0].slip_stopped = false;
+    stop_imminent(bodies, contacts, 0.0);
+    CHECK_FALSE(contacts[0].slip_stopped);
+  }
+}
+
+TEST_CASE("stop_imminent: the floor leaves a growing slip and judges the present direction",
+          "[scheduler][island]") {
+  const double floor = 5e-7;
+  // Pushed along +x at 2 mu g, sliding at a tenth of the floor: its slip grows (a start from
+  // rest), and it goes on sliding.
+  std::vector<HeldBody> bodies = {cube(0.0, Vec3(0.1 * floor, 0.0, 0.0), Vec3::Zero())};
+  bodies[0].force_W.x() = 2.0 * kMu * kG;
+  std::vector<HeldContact> contacts = {face_on_floor(0, 0.0)};
+  stop_imminent(bodies, contacts, 0.0, floor);
+  CHECK_FALSE(contacts[0].slip_stopped);
+  // Unpushed, sliding along -y while the plan's direction still says +x: resisted against +x it
+  // would turn rather than shrink (its rate across it), resisted against its present direction,
+  // as its motion resists it, it decelerates - and stops.
+  bodies = {cube(0.0, Vec3(0.0, -0.5 * floor, 0.0), Vec3::Zero())};
+  contacts = {face_on_floor(0, 0.0)};
+  REQUIRE(contacts[0].slip_dir.x() == 1.0);
+  stop_imminent(bodies, contacts, 0.0, floor);
+  CHECK(contacts[0].slip_stopped);
+  CHECK(contacts[0].slip_dir.x() == 1.0);  // the direction itself is left to the plan
+}
+
+TEST_CASE("stop_imminent: the floor does not stop a spin", "[scheduler][island]") {
+  // A cube spinning on its face at a speed (at its reach) below the floor, decelerating: only the
+  // resolution stops a spin (the note in island.hpp).
+  const double floor = 5e-7;
+  std::vector<HeldBody> bodies = {cube(0.0, Vec3::Zero(), Vec3(0.0, 0.0, 1e-7))};
+  std::vector<HeldContact> contacts = {face_on_floor(0, 0.0)};
+  contacts[0].sticks = true;
+  contacts[0].spin_sticks = false;
+  contacts[0].spin_sign = 1.0;
+  stop_imminent(bodies, contacts, 0.0, floor);
+  CHECK_FALSE(contacts[0].spin_stopped);
+  // The resolution does (it would stop within 1 s).
+  stop_imminent(bodies, contacts, 1.0, floor);
+  CHECK(contacts[0].spin_stopped);
 }
