@@ -259,9 +259,9 @@ struct Simulation::Impl {
   // microcollision speed: what would have started a microcollision train); if the contact then
   // separates slower than the microcollision speed, it is held. A contact whose features offer no
   // plane (two spheres, a sphere on an edge) cannot be held: it stays a microcollision train, as
-  // under Mirtich's model.
-  CollisionRecord collide_or_hold(std::uint32_t index, Contact& c, const DistanceResult& dr,
-                                  double t);
+  // under Mirtich's model. Nothing (no collision) where the touch is held without an impulse.
+  std::optional<CollisionRecord> collide_or_hold(std::uint32_t index, Contact& c,
+                                                 const DistanceResult& dr, double t);
 
   // The collide_or_hold round of pair `p` at instant t: how many times it collided there before.
   static int collision_round(const PairSet::Pair& p, double t) {

@@ -56,7 +56,7 @@ struct Expected {
 // The committed final-state hashes of the shipped scenes.
 const Expected kExpected[] = {
     {"ball_on_platter.json", 0x05f50177987f5e0bull},
-    {"balls_in_dish.json", 0xabc023685a7a9233ull},
+    {"balls_in_dish.json", 0x6bef686ad0fde2fcull},
     {"block_on_ramp_accelerating.json", 0x7baccee39ea4ad1eull},
     {"block_on_ramp_decelerating.json", 0x8369ce1c7eaca70aull},
     {"bowling.json", 0x4e9cf903834b950dull},
