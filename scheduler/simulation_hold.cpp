@@ -22,12 +22,13 @@ std::optional<CollisionRecord> Simulation::Impl::collide_or_hold(std::uint32_t i
                                                                  double t) {
   PairSet::Pair& p = pairs.pair(index);
   const BodyId a = p.a, b = p.b;
+  const double approach = -initial_normal_velocity(c);
   // A pair colliding again at the same instant is one whose bodies' other contacts (held, and
   // resolved after it, not with it) keep sending it back: a train of rebounds shrinking by the
   // restitution. Its limit is the plastic collision, taken at once from the third round; from
   // the fifth, a hold that keeps letting go at once gives way to a microcollision, whose
   // rebound floor moves the pair on in time.
-  if (p.landed && -initial_normal_velocity(c) <= settle_speed(p)) {
+  if (p.landed && approach <= settle_speed(p)) {
     p.quiet_landings = static_cast<std::uint8_t>(std::min(p.quiet_landings + 1, 255));
   } else {
     p.quiet_landings = 0;
@@ -59,8 +60,7 @@ std::optional<CollisionRecord> Simulation::Impl::collide_or_hold(std::uint32_t i
   // The least speed a held pair is resolved at (below): the hand-over speed, at least the
   // settling speed - a fall from the plane's resolution, the least the model resolves.
   const double v_least = std::max(v_hold, held_pair ? settle_speed(p) : 0.0);
-  const bool gentle =
-      -initial_normal_velocity(c) <= v_hold * (1.0 + settings().microcollision_speed_slack);
+  const bool gentle = approach <= v_hold * (1.0 + settings().microcollision_speed_slack);
   // A touch slower than a hundredth of the hand-over speed into a body that other contacts hold
   // is held without an impulse of its own: the island's plan takes out its approach together
   // with every held contact's (its velocity projection, which gives up kinetic energy), not a
@@ -71,8 +71,7 @@ std::optional<CollisionRecord> Simulation::Impl::collide_or_hold(std::uint32_t i
   // one instant goes on through the rounds below. (Up to the hand-over speed itself, most piles
   // were cheaper still, but one of 16 ball piles and one of 24 hull piles broke down: their
   // islands grew, their motions were rejected step after step, cut off at 120 s of CPU.)
-  if (-initial_normal_velocity(c) <= 1e-2 * v_hold && link && zeno.empty() && round < 2 &&
-      (island(a) || island(b))) {
+  if (approach <= 1e-2 * v_hold && link && zeno.empty() && round < 2 && (island(a) || island(b))) {
     hold(index, *link, dr, t, /*struck=*/false);
     return std::nullopt;
   }
