@@ -416,6 +416,12 @@ Vec3 on_feature(const std::vector<Vec3>& feature, const Vec3& n, const Vec3& q) 
 // cycle of three stops every 1.5e-7 s, 3,500 times, each re-planning an island of 29 balls.
 void stop_imminent(const std::vector<HeldBody>& bodies, std::vector<HeldContact>& contacts,
                    double resolution, double floor) {
+  // Run at every plan: where nothing slides (an island sticking everywhere, at rest), there is
+  // nothing to stop and no solve to make.
+  const auto sliding = [](const HeldContact& c) {
+    return c.active && (slides(c, 0) || slides(c, 1) || slides(c, 2));
+  };
+  if (std::none_of(contacts.begin(), contacts.end(), sliding)) return;
   // Its motion holds the velocities (slip_W, dw_W) beside their rates, with what slides resisted
   // against its present direction, as the motion would follow it (a plan's direction may be
   // stale by now).
