@@ -237,3 +237,70 @@ TEST_CASE("nearest_point: a remembered active set that no longer holds is not us
   e << 1.0, 0.0;
   CHECK_FALSE(nearest_point(E, e).has_value());
 }
+
+namespace {
+
+// nearest_by_enumeration over the subsets of at most k rows, for more rows than 2^m allows.
+std::optional<VecX> nearest_by_small_subsets(const MatX& C, const VecX& d) {
+  const Eigen::Index m = C.rows(), k = C.cols();
+  const double tolerance = 1e-9 * (d.cwiseAbs().maxCoeff() + 1.0);
+  std::optional<VecX> best;
+  std::vector<Eigen::Index> in;
+  auto consider = [&]() {
+    VecX y = VecX::Zero(k);
+    if (!in.empty()) {
+      const MatX Cs = C(in, Eigen::placeholders::all);
+      Eigen::FullPivLU<MatX> lu(Cs * Cs.transpose());
+      if (!lu.isInvertible()) return;
+      y = Cs.transpose() * lu.solve(d(in));
+    }
+    if ((C * y - d).minCoeff() < -tolerance) return;
+    if (!best || y.norm() < best->norm()) best = y;
+  };
+  auto recurse = [&](auto&& self, Eigen::Index from) -> void {
+    consider();
+    if (static_cast<Eigen::Index>(in.size()) == k) return;
+    for (Eigen::Index i = from; i < m; ++i) {
+      in.push_back(i);
+      self(self, i + 1);
+      in.pop_back();
+    }
+  };
+  recurse(recurse, 0);
+  return best;
+}
+
+}  // namespace
+
+TEST_CASE("nearest_point: many nearly parallel inequalities in few unknowns", "[impulse][lcp]") {
+  // Rows in groups of 16 nearly parallel ones (the facets of an inscribed 16-gon cone, seen
+  // from the null space of a redundant island: nearest_feasible's problems), most of them
+  // broken at the origin, against enumeration of every active set of at most k rows. Of the 40
+  // sets, 18 are not empty. (The dual LCP over every broken row at once is a tableau of up to 48
+  // or 64 rows of rank k here.)
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> normal;
+  for (int trial = 0; trial < 40; ++trial) {
+    const Eigen::Index k = 2 + trial % 2, groups = 3 + trial % 2;
+    CAPTURE(trial, k);
+    MatX C(16 * groups, k);
+    VecX d(16 * groups);
+    for (Eigen::Index g = 0; g < groups; ++g) {
+      const VecX axis = random_matrix(rng, k, 1).normalized();
+      const MatX spread = random_matrix(rng, k, 2);
+      const double offset = normal(rng);
+      for (int j = 0; j < 16; ++j) {
+        const double angle = 2.0 * M_PI * j / 16;
+        const VecX row =
+            axis + 0.3 * (std::cos(angle) * spread.col(0) + std::sin(angle) * spread.col(1));
+        C.row(16 * g + j) = row.transpose();
+        d(16 * g + j) = offset + 1.0;
+      }
+    }
+    const std::optional<VecX> expected = nearest_by_small_subsets(C, d);
+    const std::optional<VecX> got = nearest_point(C, d);
+    REQUIRE(got.has_value() == expected.has_value());
+    if (!got) continue;
+    CHECK((*got - *expected).norm() <= 1e-9 * (expected->norm() + 1.0));
+  }
+}
