@@ -56,12 +56,12 @@ struct Expected {
 // The committed final-state hashes of the shipped scenes.
 const Expected kExpected[] = {
     {"ball_on_platter.json", 0x05f50177987f5e0bull},
-    {"balls_in_dish.json", 0x6bef686ad0fde2fcull},
+    {"balls_in_dish.json", 0xcd7e8267597d57f7ull},
     {"block_on_ramp_accelerating.json", 0x7baccee39ea4ad1eull},
     {"block_on_ramp_decelerating.json", 0x8369ce1c7eaca70aull},
-    {"bowling.json", 0x4e9cf903834b950dull},
+    {"bowling.json", 0x5baeb39707965197ull},
     {"chain_of_balls.json", 0x7406d24437bd46daull},
-    {"coins.json", 0xb4a120fa737bb9b5ull},
+    {"coins.json", 0x531c6b9c92b7712cull},
     {"cylinder_rolling_slope.json", 0x4bc4bf6ecb23e51aull},
     {"eulers_disk.json", 0xaf30eba8493be1b7ull},
     {"pool_break.json", 0xe0d5e77eeedce905ull},
