@@ -158,8 +158,9 @@ double motion_slip_floor(const Settings& settings, double g, double size,
 // The bodies' states at time t: island bodies from `states`, the others extrapolated.
 // `follow`: sliding contacts take the direction of their present relative motion (see below);
 // `slip_before` and `dw_before`, each contact's slip and relative angular velocity at the
-// start of the integration step (world), for a slip, spin or rolling that has fallen below the
-// floor within the step.
+// start of the integration step (world): for a slip, spin or rolling that has fallen below the
+// floor within the step, and for one below it at the step's start, which keeps its rule all
+// step.
 Problem build_problem(const Island& island, const World& world,
                       const std::vector<BodyState>& states, double t, bool follow = false,
                       double slip_floor = 0.0, const std::vector<Vec3>* slip_before = nullptr,
