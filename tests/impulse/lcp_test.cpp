@@ -146,25 +146,34 @@ namespace {
 // The point of {y : C y >= d} nearest the origin by brute force: the projection of the origin
 // onto every affine set {C_S y = d_S} of independent rows S (the nearest point lies in the
 // relative interior of a face, the projection onto that face's affine hull), the least of those
-// that meet every inequality. nullopt where none does (the set is empty).
+// that meet every inequality. nullopt where none does (the set is empty). Independent rows are
+// at most C.cols(), so only the subsets that small are visited.
 std::optional<VecX> nearest_by_enumeration(const MatX& C, const VecX& d) {
   const Eigen::Index m = C.rows(), k = C.cols();
   const double tolerance = 1e-9 * (d.cwiseAbs().maxCoeff() + 1.0);
   std::optional<VecX> best;
-  for (unsigned mask = 0; mask < (1u << m); ++mask) {
-    const std::vector<Eigen::Index> in = members(mask, m);
-    if (static_cast<Eigen::Index>(in.size()) > k) continue;
+  std::vector<Eigen::Index> in;
+  auto consider = [&]() {
     VecX y = VecX::Zero(k);
     if (!in.empty()) {
       const MatX Cs = C(in, Eigen::placeholders::all);
-      const VecX ds = d(in);
       Eigen::FullPivLU<MatX> lu(Cs * Cs.transpose());
-      if (!lu.isInvertible()) continue;
-      y = Cs.transpose() * lu.solve(ds);
+      if (!lu.isInvertible()) return;
+      y = Cs.transpose() * lu.solve(d(in));
     }
-    if ((C * y - d).minCoeff() < -tolerance) continue;
+    if ((C * y - d).minCoeff() < -tolerance) return;
     if (!best || y.norm() < best->norm()) best = y;
-  }
+  };
+  auto subsets_from = [&](auto&& self, Eigen::Index from) -> void {
+    consider();
+    if (static_cast<Eigen::Index>(in.size()) == k) return;
+    for (Eigen::Index i = from; i < m; ++i) {
+      in.push_back(i);
+      self(self, i + 1);
+      in.pop_back();
+    }
+  };
+  subsets_from(subsets_from, 0);
   return best;
 }
 
@@ -238,40 +247,6 @@ TEST_CASE("nearest_point: a remembered active set that no longer holds is not us
   CHECK_FALSE(nearest_point(E, e).has_value());
 }
 
-namespace {
-
-// nearest_by_enumeration over the subsets of at most k rows, for more rows than 2^m allows.
-std::optional<VecX> nearest_by_small_subsets(const MatX& C, const VecX& d) {
-  const Eigen::Index m = C.rows(), k = C.cols();
-  const double tolerance = 1e-9 * (d.cwiseAbs().maxCoeff() + 1.0);
-  std::optional<VecX> best;
-  std::vector<Eigen::Index> in;
-  auto consider = [&]() {
-    VecX y = VecX::Zero(k);
-    if (!in.empty()) {
-      const MatX Cs = C(in, Eigen::placeholders::all);
-      Eigen::FullPivLU<MatX> lu(Cs * Cs.transpose());
-      if (!lu.isInvertible()) return;
-      y = Cs.transpose() * lu.solve(d(in));
-    }
-    if ((C * y - d).minCoeff() < -tolerance) return;
-    if (!best || y.norm() < best->norm()) best = y;
-  };
-  auto recurse = [&](auto&& self, Eigen::Index from) -> void {
-    consider();
-    if (static_cast<Eigen::Index>(in.size()) == k) return;
-    for (Eigen::Index i = from; i < m; ++i) {
-      in.push_back(i);
-      self(self, i + 1);
-      in.pop_back();
-    }
-  };
-  recurse(recurse, 0);
-  return best;
-}
-
-}  // namespace
-
 TEST_CASE("nearest_point: many nearly parallel inequalities in few unknowns", "[impulse][lcp]") {
   // Rows in groups of 16 nearly parallel ones (the facets of an inscribed 16-gon cone, seen
   // from the null space of a redundant island: nearest_feasible's problems), most of them
@@ -297,7 +272,7 @@ TEST_CASE("nearest_point: many nearly parallel inequalities in few unknowns", "[
         d(16 * g + j) = offset + 1.0;
       }
     }
-    const std::optional<VecX> expected = nearest_by_small_subsets(C, d);
+    const std::optional<VecX> expected = nearest_by_enumeration(C, d);
     const std::optional<VecX> got = nearest_point(C, d);
     REQUIRE(got.has_value() == expected.has_value());
     if (!got) continue;
