@@ -1003,6 +1003,30 @@ void Island::classify(const World& world, const std::vector<const ShapeGeometry*
       uniform = uniform && parallel(plane_coords(c, m.roll_rate_W), c.roll_dir);
     }
   }
+  // A contact at a point or along a segment cannot move its centre of pressure across itself:
+  // where the side it alone holds slides against it (a box sliding over a table's edge, held on
+  // that edge once its pressure reached it), the moments change along the motion, and the side
+  // turns. (Taken as uniform, such a box slid on over the void without turning, held up by the
+  // edge, and fell only where its slip stopped.)
+  if (uniform) {
+    for (std::size_t k = 0; k < nb; ++k) a_[k] = sol.a_W[k];
+    LinksByBody touching;
+    for (std::size_t i = 0; i < contacts.size() && uniform; ++i) {
+      const HeldContact& c = contacts[i];
+      if (!c.active || c.patch == PatchKind::kPolygon) continue;
+      if (touching.empty()) touching = links_by_body();
+      const int km = index_of(links[i].mover);
+      const Vec3 v_m = km >= 0 ? anchor_[static_cast<std::size_t>(km)].v_W : c.mover_known.v_W;
+      const Vec3 a_m = km >= 0 ? a_[static_cast<std::size_t>(km)] : c.mover_known.a_W;
+      const PressureMotion moves = pressure_motion(world, contacts, sol, i, touching);
+      auto across = [&](Vec3 d) {
+        d -= c.n_W * c.n_W.dot(d);
+        if (c.patch == PatchKind::kSegment) d -= c.segment_W * c.segment_W.dot(d);
+        return d.norm();
+      };
+      uniform = across(moves.v_W - v_m) <= still && across(moves.a_W - a_m) <= a_floor;
+    }
+  }
   if (uniform) {
     motion = Motion::kUniform;
     for (std::size_t k = 0; k < nb; ++k) {
@@ -1048,6 +1072,77 @@ void Island::extend(const World& world, const std::vector<const ShapeGeometry*>&
   integrate(world, geometry, /*extending=*/true);
 }
 
+Island::LinksByBody Island::links_by_body() const {
+  LinksByBody out(bodies.size());
+  for (std::size_t j = 0; j < links.size(); ++j) {
+    const int km = index_of(links[j].mover), ks = index_of(links[j].support);
+    if (km >= 0) out[static_cast<std::size_t>(km)].emplace_back(static_cast<int>(j), ks);
+    if (ks >= 0) out[static_cast<std::size_t>(ks)].emplace_back(static_cast<int>(j), km);
+  }
+  return out;
+}
+
+Island::PressureMotion Island::pressure_motion(const World& world,
+                                               const std::vector<HeldContact>& contacts,
+                                               const HeldSolution& sol, std::size_t i,
+                                               const LinksByBody& touching) const {
+  const HeldLink& link = links[i];
+  const int km = index_of(link.mover), ks = index_of(link.support);
+  auto v_of = [&](int k) { return anchor_[static_cast<std::size_t>(k)].v_W; };
+  auto a_of = [&](int k) { return a_[static_cast<std::size_t>(k)]; };
+  const PressureMotion on_mover{km >= 0 ? v_of(km) : contacts[i].mover_known.v_W,
+                                km >= 0 ? a_of(km) : contacts[i].mover_known.a_W, true};
+  // The bodies joined to `from` by the island's other active links, in `side`; false where they
+  // reach a body outside the island (a fixed or kinematic one) or `other`.
+  auto apart = [&](int from, int other, std::vector<int>& side) {
+    std::vector<char> seen(bodies.size(), 0);
+    side = {from};
+    seen[static_cast<std::size_t>(from)] = 1;
+    for (std::size_t head = 0; head < side.size(); ++head) {
+      for (const auto& [j, next] : touching[static_cast<std::size_t>(side[head])]) {
+        if (j == static_cast<int>(i) || !contacts[static_cast<std::size_t>(j)].active) continue;
+        if (next < 0 || next == other) return false;
+        if (!seen[static_cast<std::size_t>(next)]) {
+          seen[static_cast<std::size_t>(next)] = 1;
+          side.push_back(next);
+        }
+      }
+    }
+    return true;
+  };
+  // The pressure of a side that this contact alone holds: its bodies' moments about the contact
+  // balance the contact's force, so the force's line of action - the centre of pressure, where
+  // it meets the plane - moves with the side (with its one body, where they move as one).
+  auto riding = [&](const std::vector<int>& side, int root, double sign) -> PressureMotion {
+    const bool one = std::all_of(side.begin(), side.end(), [&](int k) {
+      return v_of(k) == v_of(root) && a_of(k) == a_of(root);
+    });
+    if (one) return {v_of(root), a_of(root), root == km};
+    // Bodies of the side moving against each other: (p - O) x F = sum_k (x_k - O) x m_k (a_k - g)
+    // + I_k alpha_k (constant), so p's rates in the plane follow from those of the right side.
+    const HeldContact& c = contacts[i];
+    const HeldContactForces& f = sol.forces[i];
+    const Vec3 F = sign * (f.normal * c.n_W + f.friction.x() * c.t1_W + f.friction.y() * c.t2_W);
+    const double N = F.dot(c.n_W);
+    if (!(std::abs(N) > 0.0)) return on_mover;
+    Vec3 T1 = Vec3::Zero(), T2 = Vec3::Zero();
+    for (const int k : side) {
+      const Vec3 load = world.bodies[bodies[static_cast<std::size_t>(k)].index].mass.mass *
+                        (a_of(k) - world.gravity_W);
+      T1 += v_of(k).cross(load);
+      T2 += a_of(k).cross(load);
+    }
+    auto in_plane = [&](const Vec3& T) {
+      return Vec3((-T.dot(c.t2_W) / N) * c.t1_W + (T.dot(c.t1_W) / N) * c.t2_W);
+    };
+    return {in_plane(T1), in_plane(T2), false};
+  };
+  std::vector<int> side;
+  if (km >= 0 && apart(km, ks, side)) return riding(side, km, 1.0);
+  if (ks >= 0 && apart(ks, km, side)) return riding(side, ks, -1.0);
+  return on_mover;  // held on both sides: taken as riding on the mover
+}
+
 void Island::find_uniform_event(const World& world, const std::vector<HeldContact>& contacts,
                                 const HeldSolution& sol) {
   auto consider = [&](double dt, IslandEvent::Kind kind, std::size_t link) {
@@ -1056,6 +1151,7 @@ void Island::find_uniform_event(const World& world, const std::vector<HeldContac
       event = IslandEvent{kind, static_cast<int>(link)};
     }
   };
+  LinksByBody touching;  // made at the first face
   for (std::size_t i = 0; i < contacts.size(); ++i) {
     const HeldContact& c = contacts[i];
     const HeldContactMotion& m = sol.motion[i];
@@ -1075,8 +1171,7 @@ void Island::find_uniform_event(const World& world, const std::vector<HeldContac
       const double rate = plane_coords(c, m.roll_rate_W).dot(c.roll_dir);
       if (rate < 0.0) consider(s / -rate, IslandEvent::Kind::kRollStop, i);
     }
-    // The centre of pressure (fixed on the mover, which does not turn; a sphere's contact point
-    // follows its centre) reaching an edge of the support's face.
+    // The centre of pressure reaching an edge of the support's face, or of the mover's.
     const HeldLink& link = links[i];
     if (link.support_face_S.size() < 3) continue;
     const int km = index_of(link.mover), ks = index_of(link.support);
@@ -1088,18 +1183,33 @@ void Island::find_uniform_event(const World& world, const std::vector<HeldContac
         ks >= 0 ? anchor_[static_cast<std::size_t>(ks)] : world.bodies[link.support.index].state;
     const Vec2& cop = sol.forces[i].centre_of_pressure;
     const Vec3 p = c.c_W + cop.x() * c.t1_W + cop.y() * c.t2_W;
-    const Mat3 R = rotation(ss);
-    const std::size_t n = link.support_face_S.size();
-    for (std::size_t e = 0; e < n; ++e) {
-      const Vec3 a = ss.x_W + R * link.support_face_S[e];
-      const Vec3 b = ss.x_W + R * link.support_face_S[(e + 1) % n];
-      // Inward normal of the edge in the plane (the face is counter-clockwise about n).
-      const Vec3 inward = c.n_W.cross(b - a).normalized();
-      const double f0 = inward.dot(p - a);
-      const double f1 = inward.dot(v_m - v_s);
-      const double f2 = inward.dot(a_m - a_s);
-      const double dt = first_negative(f0, f1, f2);
-      if (std::isfinite(dt)) consider(dt, IslandEvent::Kind::kTip, i);
+    if (touching.empty()) touching = links_by_body();
+    const PressureMotion moves = pressure_motion(world, contacts, sol, i, touching);
+    auto watch = [&](const std::vector<Vec3>& face_B, const BodyState& s, const Vec3& v_edge,
+                     const Vec3& a_edge) {
+      const Mat3 R = rotation(s);
+      const std::size_t n = face_B.size();
+      Vec3 centre = Vec3::Zero();
+      for (const Vec3& q : face_B) centre += s.x_W + R * q;
+      centre /= static_cast<double>(n);
+      for (std::size_t e = 0; e < n; ++e) {
+        const Vec3 a = s.x_W + R * face_B[e];
+        const Vec3 b = s.x_W + R * face_B[(e + 1) % n];
+        // Inward normal of the edge in the plane.
+        Vec3 inward = c.n_W.cross(b - a).normalized();
+        if (inward.dot(centre - a) < 0.0) inward = -inward;
+        const double f0 = inward.dot(p - a);
+        const double f1 = inward.dot(moves.v_W - v_edge);
+        const double f2 = inward.dot(moves.a_W - a_edge);
+        const double dt = first_negative(f0, f1, f2);
+        if (std::isfinite(dt)) consider(dt, IslandEvent::Kind::kTip, i);
+      }
+    };
+    watch(link.support_face_S, ss, v_s, a_s);
+    // Where the pressure does not ride on the mover (it rides on the support: a box sliding on a
+    // longer block that holds it from below), it can reach an edge of the mover's own face.
+    if (!moves.on_mover && km >= 0 && link.mover_feature_M.size() >= 3) {
+      watch(link.mover_feature_M, anchor_[static_cast<std::size_t>(km)], v_m, a_m);
     }
   }
 }

@@ -31,6 +31,7 @@
 #include "scheduler/held_link.hpp"
 #include "scheduler/world.hpp"
 
+#include <utility>
 #include <vector>
 
 namespace palpable {
@@ -151,6 +152,21 @@ class Island {
                 const std::vector<HeldContact>& contacts, const HeldSolution& solution);
   void find_uniform_event(const World& world, const std::vector<HeldContact>& contacts,
                           const HeldSolution& solution);
+  // Each body's links, with the body at each one's other end (-1: outside the island).
+  using LinksByBody = std::vector<std::vector<std::pair<int, int>>>;
+  LinksByBody links_by_body() const;
+  // How the centre of pressure of links[i] moves over a uniform motion (in the plane; its
+  // velocity and acceleration), and whether it rides on the mover: with the side of the link
+  // that it alone holds (without it, joined to nothing fixed or kinematic), the mover's where
+  // both are such (where neither is, it is taken to ride on the mover).
+  struct PressureMotion {
+    Vec3 v_W = Vec3::Zero();
+    Vec3 a_W = Vec3::Zero();
+    bool on_mover = true;
+  };
+  PressureMotion pressure_motion(const World& world, const std::vector<HeldContact>& contacts,
+                                 const HeldSolution& solution, std::size_t i,
+                                 const LinksByBody& touching) const;
   // From anchor_ at t0; `extending`: a chunk of the motion planned before (extend()), which keeps
   // its speed scale and slip floor.
   void integrate(const World& world, const std::vector<const ShapeGeometry*>& geometry,

@@ -331,6 +331,119 @@ TEST_CASE("persistent: a box on a sliding block stops with it at the closed-form
   }
 }
 
+namespace {
+
+// A 0.5 kg box (0.1 m cube) sliding at `v_box` on a 1 kg block (half extents `block_half`, on a
+// floor with mu 0.3, launched at `v_block`; or a fixed table of that size where `table`), mu 0.2
+// between them; listed before the block where `box_first` (the box then holds the block's face,
+// not the block the box's).
+World box_on_block(const Vec3& block_half, double v_block, double v_box, bool box_first,
+                   bool table) {
+  World world;
+  world.settings = persistent();
+  world.default_material = Material{0.2, 0.0};
+  world.add(test::fixed_ground("floor"));
+  const Body block =
+      table ? test::fixed_body("block", ConvexPolyhedron::box(block_half), Vec3(0, 0, 0.05))
+            : test::box_body("block", block_half, 1.0, Vec3(0, 0, 0.05), Quat::Identity(),
+                             Vec3(v_block, 0, 0));
+  const Body box = test::box_body("box", Vec3(0.05, 0.05, 0.05), 0.5, Vec3(0, 0, 0.15),
+                                  Quat::Identity(), Vec3(v_box, 0, 0));
+  world.add(box_first ? box : block);
+  world.add(box_first ? block : box);
+  world.pair_materials.push_back(
+      PairMaterial{BodyId{0}, BodyId{box_first ? 2u : 1u}, Material{0.3, 0.0}});
+  return world;
+}
+
+}  // namespace
+
+TEST_CASE(
+    "persistent: a box sliding on a sliding block stops where mu g stops it, either way round",
+    "[scheduler][persistent]") {
+  // Launched together at 1 m/s, the box slides on the block (mu 0.2 < the block's deceleration
+  // over g): the block decelerates at (0.3 x 1.5 - 0.2 x 0.5) g = 0.35 g and stops at
+  // 1 / (0.35 g), then stays (0.2 x 0.5 g < 0.3 x 1.5 g); the box decelerates at 0.2 g
+  // throughout and stops at 1 / (0.2 g). Neither turns. (Until 2026-12-01, with the block
+  // listed first - the block holding the box's face - the box's centre of pressure was taken to
+  // ride on the block: it "reached" the box's rear edge after 6 cm of slip, and the box was
+  // tipped over a point in the middle of the block's face and tumbled.)
+  const double g = kG;
+  for (const bool box_first : {false, true}) {
+    for (const double v_block : {1.0, 0.0}) {
+      CAPTURE(box_first, v_block);
+      World world = box_on_block(Vec3(0.5, 0.1, 0.05), v_block, 1.0, box_first, false);
+      Simulation sim(world, SimulationOptions{0.01});
+      Modes rec;
+      sim.run_until(1.0, &rec);
+      const int box = box_first ? 1 : 2, block = box_first ? 2 : 1;
+      const double t_box = 1.0 / (0.2 * g);
+      const double t_block = v_block > 0.0 ? 1.0 / (0.35 * g) : 0.0;
+      double box_stop = -1.0, block_stop = -1.0;
+      for (const ModeChange& m : rec.changes) {
+        if (std::string(m.kind) != "stick") continue;
+        const bool floor_link = m.a.index == 0 || m.b.index == 0;
+        (floor_link ? block_stop : box_stop) = m.t;
+      }
+      CHECK(box_stop == Approx(t_box).margin(1e-12));
+      if (v_block > 0.0) CHECK(block_stop == Approx(t_block).margin(1e-12));
+      const BodyState b = sim.state_at(BodyId{static_cast<std::uint32_t>(box)}, 1.0);
+      const BodyState k = sim.state_at(BodyId{static_cast<std::uint32_t>(block)}, 1.0);
+      CHECK(b.x_W.x() == Approx(0.5 / (0.2 * g)).margin(1e-12));
+      CHECK(k.x_W.x() == Approx(v_block * 0.5 / (0.35 * g)).margin(1e-12));
+      CHECK(b.x_W.z() == Approx(0.15).margin(1e-12));
+      CHECK(b.v_W.norm() == 0.0);
+      CHECK(k.v_W.norm() == 0.0);
+      CHECK(std::abs(b.q_WM.w()) == Approx(1.0).margin(1e-15));
+    }
+  }
+}
+
+TEST_CASE("persistent: a box sliding off a table's edge tips over it there and falls, either way",
+          "[scheduler][persistent]") {
+  // A box (0.1 m cube) launched at 1 m/s on a 0.2 m table (mu 0.2): it decelerates at 0.2 g,
+  // x = t - 0.1 g t^2, and its centre of pressure, mu h / 2 = 1 cm ahead of its centre, reaches
+  // the table's edge at x = 0.1 when its centre is at 0.09: there it starts to turn over the
+  // edge. The table is fixed, or a block at rest on the floor (which friction keeps still),
+  // listed after the box or before it: the same motion. (Until 2026-12-01 the box, held on the
+  // edge from that instant, was planned as sliding on without turning, the edge's moment arm
+  // taken as fixed: it slid on over the void to where its slip stopped, 0.255 m, and fell flat.)
+  const double g = kG;
+  const double t_tip = (1.0 - std::sqrt(1.0 - 4.0 * 0.1 * g * 0.09)) / (2.0 * 0.1 * g);
+  std::vector<std::vector<BodyState>> paths;
+  for (const int variant : {0, 1, 2}) {
+    CAPTURE(variant);
+    World world = box_on_block(Vec3(0.1, 0.1, 0.05), 0.0, 1.0, variant == 1, variant == 0);
+    const std::uint32_t box = variant == 1 ? 1 : 2;
+    Simulation sim(world, SimulationOptions{0.01});
+    Modes rec;
+    sim.run_until(1.0, &rec);
+    REQUIRE(rec.first("tip"));
+    CHECK(rec.first("tip")->t == Approx(t_tip).margin(1e-12));
+    std::vector<BodyState> path;  // at 0.15, 0.2 and 0.25 s
+    for (std::size_t k = 0; k < rec.times.size(); ++k) {
+      for (const double t : {0.15, 0.2, 0.25}) {
+        if (std::abs(rec.times[k] - t) < 1e-9) path.push_back(rec.samples[k][box]);
+      }
+    }
+    REQUIRE(path.size() == 3);
+    // Turning nose down (about +y), and by 0.25 s below the table's top, off it.
+    CHECK(path[1].w_W.y() > 1.0);
+    CHECK(path[2].x_W.z() < 0.1);
+    // On the floor by 1 s, on its front face (turned a quarter turn about y).
+    const BodyState end = sim.state_at(BodyId{box}, 1.0);
+    CHECK(end.x_W.x() > 0.15);
+    CHECK(end.x_W.z() == Approx(0.05).margin(1e-4));
+    CHECK(2.0 * std::acos(std::min(1.0, std::abs(end.q_WM.w()))) == Approx(kPi / 2).margin(0.05));
+    paths.push_back(path);
+  }
+  for (std::size_t v = 1; v < paths.size(); ++v) {
+    for (std::size_t k = 0; k < paths[v].size(); ++k) {
+      CHECK((paths[v][k].x_W - paths[0][k].x_W).norm() < 1e-6);
+    }
+  }
+}
+
 TEST_CASE("persistent: a ball rolling beside a wall it touches keeps its line and costs nothing",
           "[scheduler][persistent]") {
   // A ball rolls along a wall, within the target gap of it (a ball at the bottom of a dish, beside
