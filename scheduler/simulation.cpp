@@ -148,10 +148,27 @@ bool Simulation::Impl::lifting(const PairSet::Pair& p, const Contact& c, double 
   return !(c.u_n < -rounding_speed(c));
 }
 
+Island::MotionBound Simulation::Impl::held_bound(const Island& is, BodyId id,
+                                                 const BodyState& s) const {
+  Island::MotionBound b = is.bound(static_cast<std::size_t>(is.index_of(id)));
+  if (!std::isfinite(b.w_bound)) {
+    // A uniform motion that turns ever faster and has no end (a cylinder rolling down a
+    // halfspace, or rolling on the level with an angular acceleration of rounding): its bound
+    // over all time is infinite, and every pair of its body was checked at each tick of the
+    // clock (a log resting on a log, 1.5 million checks in 0.7 ms). A check is never scheduled
+    // past the body's broad-phase horizon, where the pair is bounded again: the bound to there.
+    const double left = pairs.body(id).horizon - s.t;
+    if (std::isfinite(left) && left >= 0.0) {
+      b.w_bound = s.w_W.norm() + (b.alpha_W.norm() + b.alpha_slack) * left;
+    }
+  }
+  return b;
+}
+
 ToiMotion Simulation::Impl::motion_for(BodyId id, const BodyState& s, const BodyState& other,
                                        BodyId other_id) const {
   if (const Island* is = planned_island(id)) {
-    const Island::MotionBound b = is->bound(static_cast<std::size_t>(is->index_of(id)));
+    const Island::MotionBound b = held_bound(*is, id, s);
     ToiMotion m;
     m.v_W = s.v_W;
     m.a_W = b.a_W;
@@ -225,7 +242,7 @@ double Simulation::Impl::held_vertex_bound(const PairSet::Pair& p, const BodySta
     if (body(plane_id).motion != MotionKind::kFixed || !half) continue;
     const Island* is = planned_island(id);
     if (!is) continue;
-    const Island::MotionBound b = is->bound(static_cast<std::size_t>(is->index_of(id)));
+    const Island::MotionBound b = held_bound(*is, id, s);
     return vertex_bound_above_plane(s, pairs.geometry(id), ps, *half, b.a_W, b.a_slack,
                                     b.w_bound * b.w_bound + b.alpha_W.norm() + b.alpha_slack,
                                     d_target);
@@ -256,7 +273,7 @@ double Simulation::Impl::held_face_bound(const PairSet::Pair& p, const BodyState
     VertexMotion m;
     if (body(id).motion == MotionKind::kFixed) return m;
     if (const Island* is = planned_island(id)) {
-      const Island::MotionBound b = is->bound(static_cast<std::size_t>(is->index_of(id)));
+      const Island::MotionBound b = held_bound(*is, id, s);
       m.accel_W = b.a_W;
       m.accel_slack = b.a_slack;
       m.w_bound = b.w_bound;

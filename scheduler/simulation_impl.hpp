@@ -148,6 +148,9 @@ struct Simulation::Impl {
   static bool lifting(const PairSet::Pair& p, const Contact& c, double t);
 
   // How a body moves over the coming interval, for a bound: free flight, or its island's motion.
+  // A held body's motion bound from its island, its angular-speed bound taken to its broad-phase
+  // horizon where the island's has no end.
+  Island::MotionBound held_bound(const Island& is, BodyId id, const BodyState& s) const;
   ToiMotion motion_for(BodyId id, const BodyState& s, const BodyState& other,
                        BodyId other_id) const;
 

@@ -921,6 +921,36 @@ TEST_CASE("persistent: a ball let go near a wall is not checked at every tick of
   }
 }
 
+TEST_CASE("persistent: a log rolling off a log is not checked at every tick of the clock",
+          "[scheduler][persistent]") {
+  // A log (a cylinder lying on its side) on the floor, a second laid on it 60 degrees off its
+  // top: the upper one rolls off, and the lower, held on the floor, rolls on the level with an
+  // angular acceleration of rounding. Its island's bound on its angular speed, |w| + |alpha| t
+  // over a motion without end, was infinite, so the pair of the two logs, a few micrometres
+  // apart, had a bound of zero and was checked at every tick of the clock: 1.5 million checks
+  // in the first 0.7 ms, the run all but stopped. Bounded to the body's broad-phase horizon
+  // (where the pair is bounded again), the run takes a few thousand checks for 10 s.
+  const double r = 0.05;
+  const Quat lying = test::about(Vec3::UnitX(), kPi / 2);
+  World world;
+  world.settings = persistent();
+  world.default_material = Material{0.5, 0.5};
+  world.add(test::fixed_ground("floor"));
+  world.add(test::dynamic_body("lower", make_cylinder(r, 0.03), 1.0, Vec3(-r, 0, r), lying));
+  world.add(test::dynamic_body("upper", make_cylinder(r, 0.03), 1.0,
+                               Vec3(0, 0, r + 2 * r * std::sin(kPi / 3)), lying));
+  Simulation sim(world, SimulationOptions{0.01});
+  Modes rec;
+  // Stopped once it has spent 100,000 checks (the old bound did in the first 0.1 ms).
+  sim.run_until(1.0, &rec, [&](double) { return sim.stats().pair_checks < 100000; });
+  CHECK(sim.time() == 1.0);
+  CHECK(sim.stats().pair_checks < 2000);
+  CHECK(sim.stats().penetrations == 0);
+  // The upper log rolled off the lower one, to the floor.
+  const BodyState upper = sim.state_at(BodyId{2}, 1.0);
+  CHECK(upper.x_W.z() < 1.1 * r);
+}
+
 namespace {
 
 // A hull from a pile (tools/stacks/pile.py, 50 hulls, seed 5), let go just above its face of
