@@ -297,6 +297,33 @@ double Simulation::Impl::held_face_bound(const PairSet::Pair& p, const BodyState
                                  pieces[static_cast<std::size_t>(piece)], face, *mf, d_target);
 }
 
+double Simulation::Impl::co_flying_step(const PairSet::Pair& p, const BodyState& s1,
+                                        const BodyState& s2, double closing) const {
+  // Bodies whose inertia is the same about every axis (a cube, a ball) keep their angular
+  // velocities in free flight, and gravity moves both alike. Seen from body a's frame (rotating
+  // at w_a about its centre of mass), a point of b at R_b r moves at (dv - w_a x dx(t)) +
+  // (w_b - w_a) x R_b r, with dx(t) = dx + dv t: no faster than |dv - w_a x dx| + |w_b - w_a|
+  // reach_b + |w_a| |dv| t. The gap closes no faster than that, so it cannot close `closing`
+  // sooner. (Bounded by each body's own rotation instead, two cubes tumbling off a ramp's edge
+  // together, one on the other 5e-12 m apart, were checked every 6e-12 s: 2.6 million checks.)
+  auto isotropic = [&](BodyId id) {
+    const Vec3& I = body(id).mass.principal_moments;
+    return I.maxCoeff() - I.minCoeff() <= 1e-12 * I.maxCoeff();
+  };
+  if (!isotropic(p.a) || !isotropic(p.b)) return 0.0;
+  double best = 0.0;
+  for (int side = 0; side < 2; ++side) {
+    const BodyState& a = side == 0 ? s1 : s2;
+    const BodyState& b = side == 0 ? s2 : s1;
+    const double reach_b = pairs.geometry(side == 0 ? p.b : p.a).reach();
+    const Vec3 dx = b.x_W - a.x_W, dv = b.v_W - a.v_W;
+    const double speed = (dv - a.w_W.cross(dx)).norm() + (b.w_W - a.w_W).norm() * reach_b;
+    const double accel = a.w_W.norm() * dv.norm();
+    best = std::max(best, solve_gap_closing(accel, speed, closing));
+  }
+  return best;
+}
+
 double Simulation::Impl::next_check_time(const PairSet::Pair& p, const BodyState& s1,
                                          const BodyState& s2, const DistanceResult& dr, double t,
                                          const Contact* known) {
@@ -361,6 +388,15 @@ double Simulation::Impl::next_check_time(const PairSet::Pair& p, const BodyState
                        p.cache, world.gravity_W, settings(), 0.5 * dr.distance);
     if (certified > bound.dt) {
       bound.dt = certified;
+      bound.floored = false;
+    }
+  }
+  if (ballistic && !bound.exact && (bound.floored || bound.dt < floor) &&
+      dr.status == ContactStatus::kSeparated && body(p.a).is_dynamic() && body(p.b).is_dynamic() &&
+      in_free_flight(p.a) && in_free_flight(p.b)) {
+    const double together = co_flying_step(p, s1, s2, 0.5 * dr.distance);
+    if (together > bound.dt) {
+      bound.dt = together;
       bound.floored = false;
     }
   }
