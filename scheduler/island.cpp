@@ -1008,9 +1008,9 @@ void Island::classify(const World& world, const std::vector<const ShapeGeometry*
   // that edge once its pressure reached it), the moments change along the motion, and the side
   // turns. (Taken as uniform, such a box slid on over the void without turning, held up by the
   // edge, and fell only where its slip stopped.)
+  LinksByBody touching;  // each body's links, made where first needed
   if (uniform) {
     for (std::size_t k = 0; k < nb; ++k) a_[k] = sol.a_W[k];
-    LinksByBody touching;
     for (std::size_t i = 0; i < contacts.size() && uniform; ++i) {
       const HeldContact& c = contacts[i];
       if (!c.active || c.patch == PatchKind::kPolygon) continue;
@@ -1044,7 +1044,7 @@ void Island::classify(const World& world, const std::vector<const ShapeGeometry*
         anchor_[k].w_W.setZero();  // below what the model resolves (snapped, see above)
       }
     }
-    find_uniform_event(world, contacts, sol);
+    find_uniform_event(world, contacts, sol, touching);
     for (std::size_t k = 0; k < nb; ++k) {
       bounds_[k].a_W = a_[k];
       bounds_[k].alpha_W = alpha_[k];
@@ -1144,14 +1144,13 @@ Island::PressureMotion Island::pressure_motion(const World& world,
 }
 
 void Island::find_uniform_event(const World& world, const std::vector<HeldContact>& contacts,
-                                const HeldSolution& sol) {
+                                const HeldSolution& sol, LinksByBody& touching) {
   auto consider = [&](double dt, IslandEvent::Kind kind, std::size_t link) {
     if (dt < t_end - t0) {
       t_end = t0 + dt;
       event = IslandEvent{kind, static_cast<int>(link)};
     }
   };
-  LinksByBody touching;  // made at the first face
   for (std::size_t i = 0; i < contacts.size(); ++i) {
     const HeldContact& c = contacts[i];
     const HeldContactMotion& m = sol.motion[i];

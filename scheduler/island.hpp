@@ -150,10 +150,11 @@ class Island {
  private:
   void classify(const World& world, const std::vector<const ShapeGeometry*>& geometry,
                 const std::vector<HeldContact>& contacts, const HeldSolution& solution);
-  void find_uniform_event(const World& world, const std::vector<HeldContact>& contacts,
-                          const HeldSolution& solution);
   // Each body's links, with the body at each one's other end (-1: outside the island).
   using LinksByBody = std::vector<std::vector<std::pair<int, int>>>;
+  // `touching`: links_by_body(), or empty until a face needs it (filled then).
+  void find_uniform_event(const World& world, const std::vector<HeldContact>& contacts,
+                          const HeldSolution& solution, LinksByBody& touching);
   LinksByBody links_by_body() const;
   // How the centre of pressure of links[i] moves over a uniform motion (in the plane; its
   // velocity and acceleration), and whether it rides on the mover: with the side of the link
