@@ -438,4 +438,25 @@ ToiBound time_to_touch(const Body& body1, const BodyState& state1, const ShapeGe
                              gravity_W, unfloored, 0.0);
 }
 
+double co_flying_time(const Body& body1, const BodyState& state1, const ShapeGeometry& geometry1,
+                      const Body& body2, const BodyState& state2, const ShapeGeometry& geometry2,
+                      double closing) {
+  auto isotropic = [](const Body& b) {
+    const Vec3& I = b.mass.principal_moments;
+    return b.is_dynamic() && I.maxCoeff() - I.minCoeff() <= 1e-12 * I.maxCoeff();
+  };
+  if (!isotropic(body1) || !isotropic(body2)) return 0.0;
+  double best = 0.0;
+  for (int side = 0; side < 2; ++side) {
+    const BodyState& a = side == 0 ? state1 : state2;
+    const BodyState& b = side == 0 ? state2 : state1;
+    const double reach_b = (side == 0 ? geometry2 : geometry1).reach();
+    const Vec3 dx = b.x_W - a.x_W, dv = b.v_W - a.v_W;
+    const double speed = (dv - a.w_W.cross(dx)).norm() + (b.w_W - a.w_W).norm() * reach_b;
+    const double accel = a.w_W.norm() * dv.norm();
+    best = std::max(best, solve_gap_closing(accel, speed, closing));
+  }
+  return best;
+}
+
 }  // namespace palpable

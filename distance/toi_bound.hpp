@@ -170,6 +170,18 @@ ToiBound time_of_impact(const Body& body1, const BodyState& state1, const ShapeG
                         const DistanceResult& closest, const PairCache& cache,
                         const Vec3& gravity_W, const Settings& settings);
 
+// Of two dynamic bodies in free flight under the same gravity, each with the same inertia about
+// every axis (a cube, a ball: its angular velocity stays what it is): a time before which their
+// gap cannot close by `closing` [s], from their motion relative to each other, which a bound from
+// each body's own rotation does not see (two cubes tumbling together, one on the other). Seen
+// from body a's frame, rotating at w_a about its centre of mass, a point of b at R_b r moves at
+// (dv - w_a x dx(t)) + (w_b - w_a) x R_b r with dx(t) = dx + dv t: no faster than
+// |dv - w_a x dx| + |w_b - w_a| reach_b + |w_a| |dv| t. The longer of the two frames' times; 0
+// where a body's inertia is not the same about every axis.
+double co_flying_time(const Body& body1, const BodyState& state1, const ShapeGeometry& geometry1,
+                      const Body& body2, const BodyState& state2, const ShapeGeometry& geometry2,
+                      double closing);
+
 // The time until the pair touches (gap 0) [s], to place an impact at the instant of contact
 // rather than where the bound stopped (half an envelope up): exact where time_of_impact is exact,
 // otherwise the conservative bound aimed at gap 0 and never floored — a lower bound on the

@@ -148,11 +148,6 @@ struct Simulation::Impl {
   static bool lifting(const PairSet::Pair& p, const Contact& c, double t);
 
   // How a body moves over the coming interval, for a bound: free flight, or its island's motion.
-  // Of two dynamic bodies in free flight, each of the same inertia about every axis: a time
-  // before which their gap cannot close by `closing`, from their motion relative to each other
-  // (0 where it does not apply).
-  double co_flying_step(const PairSet::Pair& p, const BodyState& s1, const BodyState& s2,
-                        double closing) const;
   // A held body's motion bound from its island, its angular-speed bound taken to its broad-phase
   // horizon where the island's has no end.
   Island::MotionBound held_bound(const Island& is, BodyId id, const BodyState& s) const;
