@@ -409,6 +409,36 @@ TEST_CASE("contact: a box landing on the edge of a dynamic box turns it, or tips
   }
 }
 
+TEST_CASE("contact: a box rocking onto a dynamic box lands along its edge, not on one corner",
+          "[contact][group]") {
+  // The top box, turned 0.2 rad about y and rocking at 3 rad/s about y, lands with its lowest
+  // edge (along y) on the bottom box's face. Both are dynamic, so the centre-of-pressure rule
+  // does not apply; the whole edge approaches at once, and nothing in the problem has a y: the
+  // collision's point is the edge's point nearest the foot of the top's centre (y = 0), and no
+  // velocity along y, nor rotation about x or z, comes out of it. (At one of the edge's two
+  // corners, y = +-0.1, the top left turning about x and z.)
+  for (double spin : {3.0, -3.0}) {
+    CAPTURE(spin);
+    const double a = 0.2 * (spin > 0 ? 1.0 : -1.0);
+    const Posed posed(
+        test::box_body("top", Vec3(0.1, 0.1, 0.1), 1.0,
+                       Vec3(0, 0, 0.2 + 2e-5 + 0.1 * (std::sin(std::abs(a)) + std::cos(a))),
+                       test::about(Vec3::UnitY(), a), Vec3(0, 0, -0.5), Vec3(0, spin, 0)),
+        test::box_body("bottom", Vec3(0.1, 0.1, 0.1), 1.0, Vec3(0, 0, 0.1)));
+    const Contact c = posed.contact();
+    REQUIRE(c.placement == Placement::kPoint);
+    CHECK(std::abs(c.point_W.y()) <= 1e-15);
+    CHECK(std::abs(c.point_W.x()) == Approx(0.1 * (std::cos(a) - std::sin(std::abs(a)))));
+    const Resolution r = posed.resolve_it(Material{0.5, 0.5});
+    for (const Vec3& v : {r.v1_W, r.v2_W}) CHECK(std::abs(v.y()) <= 1e-14);
+    for (const Vec3& w : {r.w1_W, r.w2_W}) {
+      CHECK(std::abs(w.x()) <= 1e-14);
+      CHECK(std::abs(w.z()) <= 1e-14);
+    }
+    CHECK(r.v1_W.z() > -0.5);  // it did collide
+  }
+}
+
 TEST_CASE("contact: what approaches, and what carries riders", "[contact]") {
   // At rest on the ground with gravity pressing: it must collide again (an e = 0 collision
   // leaves it so); lifting off at 1 cm/s: not.
