@@ -2,6 +2,7 @@
 
 #include "core/ballistic.hpp"
 #include "core/check.hpp"
+#include "distance/vclip.hpp"
 #include "impulse/contact_torque.hpp"
 #include "impulse/microcollision.hpp"
 
@@ -78,11 +79,9 @@ Vec3 first_landing_point(const std::vector<Vec3>& patch, std::size_t f, const Ve
   const double u_f = normal_velocity_at(patch[f], n_W, s1, s2);
   const double tie = 1e-12 * (1.0 + std::abs(u_f));
   for (std::size_t g : {(f + n - 1) % n, (f + 1) % n}) {  // (a segment patch: the other end)
-    if (std::abs(normal_velocity_at(patch[g], n_W, s1, s2) - u_f) > tie) continue;
-    const Vec3 edge = patch[g] - patch[f];
-    const double length2 = edge.squaredNorm();
-    if (!(length2 > 0.0)) continue;
-    return patch[f] + edge * std::clamp((foot - patch[f]).dot(edge) / length2, 0.0, 1.0);
+    if (std::abs(normal_velocity_at(patch[g], n_W, s1, s2) - u_f) <= tie) {
+      return closest_point_segment(patch[f], patch[g], foot);
+    }
   }
   return patch[f];
 }
